@@ -1,0 +1,17 @@
+//! `ibeam render`.
+
+use super::CliError;
+
+/// Arguments of `ibeam render`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Scene file (`.ib`) or Fidget model (`.vm`).
+    pub file: std::path::PathBuf,
+}
+
+/// Runs `ibeam render`.
+pub fn run(args: &Args) -> Result<(), CliError> {
+    let scene = crate::lang::load_scene(&args.file)?;
+    let _ = scene;
+    Err("not built yet".into())
+}

@@ -1,0 +1,56 @@
+//! The evaluator interface shared by the reference interpreter
+//! ([`crate::ir::interp`]) and the native code from [`crate::jit`].
+
+use crate::interval::Interval;
+
+/// A point value and its gradient (∂f/∂x, ∂f/∂y, ∂f/∂z).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Grad {
+    /// f at the point.
+    pub v: f64,
+    /// The partial derivatives.
+    pub d: [f64; 3],
+}
+
+/// An interval of f over a box and an interval for each partial derivative.
+#[derive(Copy, Clone, Debug, PartialEq)]
+#[repr(C)]
+pub struct IntervalGrad {
+    /// f over the box.
+    pub v: Interval,
+    /// ∂f/∂x, ∂f/∂y, ∂f/∂z over the box.
+    pub d: [Interval; 3],
+}
+
+/// Evaluates one surface function in the four ways the tracer needs.
+///
+/// Implementations must agree with the interpreter: point values bit for
+/// bit (within a documented ulp bound for transcendentals), and every
+/// interval must contain the point values at every point of its box.
+pub trait Evaluator: Send + Sync {
+    /// f(x, y, z).
+    fn point(&self, p: [f64; 3]) -> f64;
+
+    /// f and its gradient at a point (forward mode).
+    fn point_grad(&self, p: [f64; 3]) -> Grad;
+
+    /// An interval containing f over the box `b = [X, Y, Z]`.
+    fn interval(&self, b: [Interval; 3]) -> Interval;
+
+    /// Intervals containing f and each partial derivative over the box.
+    fn interval_grad(&self, b: [Interval; 3]) -> IntervalGrad;
+
+    /// `out[i] = f(xs[i], ys[i], zs[i])` for every i.
+    fn point_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = self.point([xs[i], ys[i], zs[i]]);
+        }
+    }
+
+    /// `out[i] = F(boxes[i])` for every i.
+    fn interval_batch(&self, boxes: &[[Interval; 3]], out: &mut [Interval]) {
+        for (b, o) in boxes.iter().zip(out.iter_mut()) {
+            *o = self.interval(*b);
+        }
+    }
+}

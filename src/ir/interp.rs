@@ -1,0 +1,2 @@
+//! Reference evaluators over the IR in plain Rust: the oracle the JIT is
+//! tested against.

@@ -1,0 +1,1 @@
+//! Lowering from the scene AST to SSA IR.

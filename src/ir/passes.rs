@@ -1,0 +1,1 @@
+//! Simplification passes, each a function from IR to IR.

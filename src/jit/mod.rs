@@ -1,0 +1,1 @@
+//! Cranelift JIT: native point, interval and gradient evaluators.

@@ -1,0 +1,53 @@
+//! The `ibeam` command line: parses arguments and reports errors; each
+//! subcommand lives in `ibeam::cli`.
+
+use clap::{Parser, Subcommand};
+use ibeam::cli;
+use std::process::ExitCode;
+
+/// Compile implicit surfaces to native code and ray trace them with
+/// guaranteed interval arithmetic.
+#[derive(Parser, Debug)]
+#[command(name = "ibeam", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Print the SSA IR of each object (simplified), optionally per pass.
+    Ir(cli::ir::Args),
+    /// Evaluate each object at a point (value and gradient) or over a box.
+    Eval(cli::eval::Args),
+    /// Render a scene to PNG with the guaranteed beam tracer.
+    Render(cli::render::Args),
+}
+
+// Deeply nested input is rejected by the parser, but lowering and
+// evaluation of large formulas still recurse a little; a big stack keeps
+// every supported input far from overflow.
+const MAIN_STACK_BYTES: usize = 256 << 20;
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let worker = std::thread::Builder::new()
+        .stack_size(MAIN_STACK_BYTES)
+        .spawn(move || match &cli.command {
+            Command::Ir(a) => cli::ir::run(a),
+            Command::Eval(a) => cli::eval::run(a),
+            Command::Render(a) => cli::render::run(a),
+        });
+    let result = match worker.map(|h| h.join()) {
+        Ok(Ok(r)) => r,
+        Ok(Err(_)) => Err("internal error: the worker thread panicked".into()),
+        Err(e) => Err(format!("cannot start the worker thread: {e}").into()),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("{e}");
+            ExitCode::FAILURE
+        }
+    }
+}

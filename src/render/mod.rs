@@ -1,0 +1,1 @@
+//! The guaranteed beam tracer.
