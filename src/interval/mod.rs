@@ -75,3 +75,251 @@ impl Interval {
         self.hi - self.lo
     }
 }
+
+/// Rounds a lower bound one ulp down (NaN stays NaN, -inf stays -inf).
+#[inline]
+pub fn down(v: f64) -> f64 {
+    v.next_down()
+}
+
+/// Rounds an upper bound one ulp up (NaN stays NaN, +inf stays +inf).
+#[inline]
+pub fn up(v: f64) -> f64 {
+    v.next_up()
+}
+
+/// min that ignores a NaN operand (NaN only if both are NaN). Used over the
+/// candidate bounds of `*` and `/`, where 0·inf and inf/inf give NaN for a
+/// combination of bounds that no real operand pair attains.
+#[inline]
+pub fn min_ignore_nan(a: f64, b: f64) -> f64 {
+    a.min(b)
+}
+
+/// max that ignores a NaN operand (NaN only if both are NaN).
+#[inline]
+pub fn max_ignore_nan(a: f64, b: f64) -> f64 {
+    a.max(b)
+}
+
+/// min that propagates NaN: the point semantics of the IR's `min`.
+#[inline]
+pub fn min_nan(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// max that propagates NaN: the point semantics of the IR's `max`.
+#[inline]
+pub fn max_nan(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+/// x^n for n >= 0 by binary exponentiation, in round-to-nearest. This is the
+/// point semantics of `powi` (and of the JIT): deterministic everywhere,
+/// unlike `f64::powi`, whose algorithm is not specified.
+pub fn powi_point(x: f64, n: i32) -> f64 {
+    if n < 0 {
+        return 1.0 / powi_unsigned(x, n.unsigned_abs(), |v| v);
+    }
+    powi_unsigned(x, n as u32, |v| v)
+}
+
+// Binary exponentiation with `round` applied after every multiplication; with
+// `up`/`down` on non-negative x it gives a rigorous upper/lower bound.
+fn powi_unsigned(x: f64, mut n: u32, round: impl Fn(f64) -> f64) -> f64 {
+    let mut result = 1.0;
+    let mut base = x;
+    let mut first = true;
+    while n > 0 {
+        if n & 1 == 1 {
+            result = if first { base } else { round(result * base) };
+            first = false;
+        }
+        n >>= 1;
+        if n > 0 {
+            base = round(base * base);
+        }
+    }
+    result
+}
+
+impl Interval {
+    /// `-self` (exact).
+    pub fn neg(self) -> Interval {
+        Interval::new(-self.hi, -self.lo)
+    }
+
+    /// `self + o`.
+    pub fn add(self, o: Interval) -> Interval {
+        Interval::new(down(self.lo + o.lo), up(self.hi + o.hi))
+    }
+
+    /// `self - o`.
+    pub fn sub(self, o: Interval) -> Interval {
+        Interval::new(down(self.lo - o.hi), up(self.hi - o.lo))
+    }
+
+    /// `self * o`: hull of the four bound products, ignoring the NaN of
+    /// 0·inf, each bound then rounded outward.
+    pub fn mul(self, o: Interval) -> Interval {
+        let p = [
+            self.lo * o.lo,
+            self.lo * o.hi,
+            self.hi * o.lo,
+            self.hi * o.hi,
+        ];
+        let lo = min_ignore_nan(min_ignore_nan(p[0], p[1]), min_ignore_nan(p[2], p[3]));
+        let hi = max_ignore_nan(max_ignore_nan(p[0], p[1]), max_ignore_nan(p[2], p[3]));
+        Interval::new(down(lo), up(hi))
+    }
+
+    /// `self / o`: the whole line when `o` contains 0 (EMPTY when o = [0, 0],
+    /// where no quotient is real).
+    pub fn div(self, o: Interval) -> Interval {
+        if self.is_empty() || o.is_empty() || (o.lo == 0.0 && o.hi == 0.0) {
+            return Interval::EMPTY;
+        }
+        if o.lo <= 0.0 && 0.0 <= o.hi {
+            return Interval::ENTIRE;
+        }
+        let q = [
+            self.lo / o.lo,
+            self.lo / o.hi,
+            self.hi / o.lo,
+            self.hi / o.hi,
+        ];
+        let lo = min_ignore_nan(min_ignore_nan(q[0], q[1]), min_ignore_nan(q[2], q[3]));
+        let hi = max_ignore_nan(max_ignore_nan(q[0], q[1]), max_ignore_nan(q[2], q[3]));
+        Interval::new(down(lo), up(hi))
+    }
+
+    /// `|self|` (exact).
+    pub fn abs(self) -> Interval {
+        if self.lo >= 0.0 {
+            self
+        } else if self.hi <= 0.0 {
+            self.neg()
+        } else {
+            Interval::new(0.0, max_nan(-self.lo, self.hi))
+        }
+    }
+
+    /// `self²`, never negative (tighter than `self * self` when 0 ∈ self).
+    pub fn square(self) -> Interval {
+        if self.is_empty() {
+            return Interval::EMPTY;
+        }
+        let a = self.abs();
+        Interval::new(down(a.lo * a.lo).max(0.0), up(a.hi * a.hi))
+    }
+
+    /// `sqrt(self)` over the non-negative part; EMPTY if self < 0.
+    pub fn sqrt(self) -> Interval {
+        if self.is_empty() || self.hi < 0.0 {
+            return Interval::EMPTY;
+        }
+        let lo = if self.lo <= 0.0 {
+            0.0
+        } else {
+            down(self.lo.sqrt()).max(0.0)
+        };
+        Interval::new(lo, up(self.hi.sqrt()))
+    }
+
+    /// `min(self, o)` (exact; EMPTY if either is).
+    pub fn min(self, o: Interval) -> Interval {
+        Interval::new(min_nan(self.lo, o.lo), min_nan(self.hi, o.hi))
+    }
+
+    /// `max(self, o)` (exact; EMPTY if either is).
+    pub fn max(self, o: Interval) -> Interval {
+        Interval::new(max_nan(self.lo, o.lo), max_nan(self.hi, o.hi))
+    }
+
+    /// `self^n` for integer n: each bound by binary exponentiation with
+    /// outward rounding after every step; negative n divides 1 by the
+    /// positive power. `self^0` is [1, 1] (as the point semantics give 1).
+    pub fn powi(self, n: i32) -> Interval {
+        if n == 0 {
+            return Interval::point(1.0);
+        }
+        if self.is_empty() {
+            return Interval::EMPTY;
+        }
+        if n < 0 {
+            return Interval::point(1.0).div(self.powi_positive(n.unsigned_abs()));
+        }
+        self.powi_positive(n as u32)
+    }
+
+    fn powi_positive(self, n: u32) -> Interval {
+        let up_pow = |m: f64| powi_unsigned(m, n, up);
+        let down_pow = |m: f64| powi_unsigned(m, n, |v| down(v).max(0.0));
+        if n % 2 == 0 {
+            let a = self.abs();
+            let lo = if n == 1 { a.lo } else { down_pow(a.lo) };
+            Interval::new(lo, up_pow(a.hi))
+        } else {
+            // Odd powers are increasing: bound each end, keeping signs.
+            let lo = if self.lo >= 0.0 {
+                down_pow(self.lo)
+            } else {
+                -up_pow(-self.lo)
+            };
+            let hi = if self.hi >= 0.0 {
+                up_pow(self.hi)
+            } else {
+                -down_pow(-self.hi)
+            };
+            Interval::new(lo, hi)
+        }
+    }
+}
+
+// PLACEHOLDERS (to be replaced by the real transcendental bounds): sound but
+// useless answers so the rest of the crate compiles.
+impl Interval {
+    fn entire_unless_empty(self) -> Interval {
+        if self.is_empty() {
+            Interval::EMPTY
+        } else {
+            Interval::ENTIRE
+        }
+    }
+    /// `exp(self)`.
+    pub fn exp(self) -> Interval {
+        self.entire_unless_empty()
+    }
+    /// `ln(self)` over the non-negative part.
+    pub fn ln(self) -> Interval {
+        self.entire_unless_empty()
+    }
+    /// `sin(self)`.
+    pub fn sin(self) -> Interval {
+        self.entire_unless_empty()
+    }
+    /// `cos(self)`.
+    pub fn cos(self) -> Interval {
+        self.entire_unless_empty()
+    }
+    /// `atan2(self, x)`: the angle of the points (x, self).
+    pub fn atan2(self, x: Interval) -> Interval {
+        self.add(x).entire_unless_empty()
+    }
+    /// `self^e` = exp(e ln self) over the non-negative part of self.
+    pub fn pow(self, e: Interval) -> Interval {
+        self.add(e).entire_unless_empty()
+    }
+}
