@@ -182,17 +182,51 @@ impl Interval {
         ];
         let lo = min_ignore_nan(min_ignore_nan(p[0], p[1]), min_ignore_nan(p[2], p[3]));
         let hi = max_ignore_nan(max_ignore_nan(p[0], p[1]), max_ignore_nan(p[2], p[3]));
+        if lo.is_nan() {
+            // All four products are 0·inf: one operand is [0, 0] and the
+            // other has only infinite bounds, so every real product is 0.
+            return if self.is_empty() || o.is_empty() {
+                Interval::EMPTY
+            } else {
+                Interval::point(0.0)
+            };
+        }
         Interval::new(down(lo), up(hi))
     }
 
-    /// `self / o`: the whole line when `o` contains 0 (EMPTY when o = [0, 0],
-    /// where no quotient is real).
+    /// `self / o` over the nonzero part of `o` (a quotient by 0 is not
+    /// real): EMPTY when o = [0, 0], a half-line when 0 is an end of `o`,
+    /// the whole line when 0 is inside `o` (unless self = [0, 0]).
     pub fn div(self, o: Interval) -> Interval {
         if self.is_empty() || o.is_empty() || (o.lo == 0.0 && o.hi == 0.0) {
             return Interval::EMPTY;
         }
         if o.lo <= 0.0 && 0.0 <= o.hi {
-            return Interval::ENTIRE;
+            if self.lo == 0.0 && self.hi == 0.0 {
+                return Interval::point(0.0);
+            }
+            if o.lo < 0.0 && 0.0 < o.hi {
+                return Interval::ENTIRE;
+            }
+            // 0 is an end of o: the divisor keeps one sign, o = [0+, hi] or
+            // [lo, 0-], and the quotient is bounded on one side.
+            let positive = o.lo == 0.0;
+            let d = if positive { o.hi } else { o.lo };
+            return if self.lo >= 0.0 {
+                if positive {
+                    Interval::new(down(self.lo / d).max(0.0), f64::INFINITY)
+                } else {
+                    Interval::new(f64::NEG_INFINITY, up(self.lo / d).min(0.0))
+                }
+            } else if self.hi <= 0.0 {
+                if positive {
+                    Interval::new(f64::NEG_INFINITY, up(self.hi / d).min(0.0))
+                } else {
+                    Interval::new(down(self.hi / d).max(0.0), f64::INFINITY)
+                }
+            } else {
+                Interval::ENTIRE
+            };
         }
         let q = [
             self.lo / o.lo,
@@ -207,7 +241,9 @@ impl Interval {
 
     /// `|self|` (exact).
     pub fn abs(self) -> Interval {
-        if self.lo >= 0.0 {
+        if self.is_empty() {
+            Interval::EMPTY
+        } else if self.lo >= 0.0 {
             self
         } else if self.hi <= 0.0 {
             self.neg()
@@ -288,38 +324,4 @@ impl Interval {
     }
 }
 
-// PLACEHOLDERS (to be replaced by the real transcendental bounds): sound but
-// useless answers so the rest of the crate compiles.
-impl Interval {
-    fn entire_unless_empty(self) -> Interval {
-        if self.is_empty() {
-            Interval::EMPTY
-        } else {
-            Interval::ENTIRE
-        }
-    }
-    /// `exp(self)`.
-    pub fn exp(self) -> Interval {
-        self.entire_unless_empty()
-    }
-    /// `ln(self)` over the non-negative part.
-    pub fn ln(self) -> Interval {
-        self.entire_unless_empty()
-    }
-    /// `sin(self)`.
-    pub fn sin(self) -> Interval {
-        self.entire_unless_empty()
-    }
-    /// `cos(self)`.
-    pub fn cos(self) -> Interval {
-        self.entire_unless_empty()
-    }
-    /// `atan2(self, x)`: the angle of the points (x, self).
-    pub fn atan2(self, x: Interval) -> Interval {
-        self.add(x).entire_unless_empty()
-    }
-    /// `self^e` = exp(e ln self) over the non-negative part of self.
-    pub fn pow(self, e: Interval) -> Interval {
-        self.add(e).entire_unless_empty()
-    }
-}
+mod transcendental;

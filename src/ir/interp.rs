@@ -30,10 +30,13 @@ pub fn point_binary(op: BinaryOp, a: f64, b: f64) -> f64 {
         BinaryOp::Max => max_nan(a, b),
         BinaryOp::Atan2 => libm::atan2(a, b),
         BinaryOp::Pow => {
-            if a < 0.0 {
+            // NaN in, NaN out (libm's pow(NaN, 0) = pow(1, NaN) = 1 would
+            // hide an undefined operand); -0 is taken as +0 so that the
+            // result is exp(b·ln a) with ln(±0) = -inf, never negative.
+            if a.is_nan() || b.is_nan() || a < 0.0 {
                 f64::NAN
             } else {
-                libm::pow(a, b)
+                libm::pow(a + 0.0, b)
             }
         }
     }
