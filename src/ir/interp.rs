@@ -486,7 +486,10 @@ fn run_igrad(ops: &[Op], b: [Interval; 3], vals: &mut Vec<IntervalGrad>) {
             Op::Var(var) => {
                 let mut d = [Interval::point(0.0); 3];
                 d[var.index()] = Interval::point(1.0);
-                IntervalGrad { v: b[var.index()], d }
+                IntervalGrad {
+                    v: b[var.index()],
+                    d,
+                }
             }
             Op::Const(c) => IntervalGrad {
                 v: Interval::point(c),
@@ -548,7 +551,11 @@ mod tests {
         let it = Interpreter::new(b.finish(r));
         assert_eq!(it.point([3.0, 4.0, 0.0]), 24.0);
         assert_eq!(it.point_grad([3.0, 4.0, 9.0]).d, [6.0, 8.0, 0.0]);
-        let i = it.interval([Interval::new(-1.0, 2.0), Interval::point(0.0), Interval::ENTIRE]);
+        let i = it.interval([
+            Interval::new(-1.0, 2.0),
+            Interval::point(0.0),
+            Interval::ENTIRE,
+        ]);
         assert!(i.contains(-1.0) && i.contains(3.0) && i.hi < 3.001 && i.lo > -1.001);
     }
 
