@@ -128,18 +128,8 @@ pub fn single_op_functions() -> Vec<(String, Function, Box<dyn Fn(f64, f64) -> f
 /// A finite point of `i` chosen by `t` in [0, 1] (ends included; an
 /// infinite end is replaced by a large finite value).
 pub fn sample(i: Interval, t: f64) -> f64 {
-    let lo = if i.lo.is_finite() { i.lo } else { -1e300f64.max(i.hi - 1e6).min(i.hi) };
-    let hi = if i.hi.is_finite() { i.hi } else { 1e300f64.min(i.lo + 1e6).max(i.lo) };
-    let lo = if i.lo == f64::NEG_INFINITY { lo.min(-1e300) } else { lo };
-    let hi = if i.hi == f64::INFINITY { hi.max(1e300) } else { hi };
-    let v = if t <= 0.0 {
-        lo
-    } else if t >= 1.0 {
-        hi
-    } else {
-        lo + (hi - lo) * t
-    };
-    v.clamp(lo, hi)
+    let (lo, hi) = (i.lo.max(f64::MIN), i.hi.min(f64::MAX));
+    (lo * (1.0 - t) + hi * t).clamp(lo, hi)
 }
 
 /// Sample positions: both ends, the middle, near the ends, and random.
