@@ -30,7 +30,11 @@ fn interval() -> impl Strategy<Value = Interval> {
     (bound(), bound()).prop_map(|(a, b)| {
         let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
         let lo = if lo == f64::INFINITY { f64::MAX } else { lo };
-        let hi = if hi == f64::NEG_INFINITY { f64::MIN } else { hi };
+        let hi = if hi == f64::NEG_INFINITY {
+            f64::MIN
+        } else {
+            hi
+        };
         Interval::new(lo, hi)
     })
 }
@@ -190,17 +194,30 @@ fn edge_results() {
         assert!(interval_unary(op, e).is_empty(), "{op:?} of EMPTY");
     }
     for op in BINARY_OPS {
-        assert!(interval_binary(op, e, Interval::new(1.0, 2.0)).is_empty(), "{op:?}(EMPTY, x)");
-        assert!(interval_binary(op, Interval::new(1.0, 2.0), e).is_empty(), "{op:?}(x, EMPTY)");
+        assert!(
+            interval_binary(op, e, Interval::new(1.0, 2.0)).is_empty(),
+            "{op:?}(EMPTY, x)"
+        );
+        assert!(
+            interval_binary(op, Interval::new(1.0, 2.0), e).is_empty(),
+            "{op:?}(x, EMPTY)"
+        );
     }
     assert!(Interval::new(-3.0, -1.0).ln().is_empty());
     assert!(Interval::new(-3.0, -1.0).sqrt().is_empty());
-    assert!(Interval::new(-3.0, -1.0).pow(Interval::point(0.5)).is_empty());
+    assert!(
+        Interval::new(-3.0, -1.0)
+            .pow(Interval::point(0.5))
+            .is_empty()
+    );
     let exp = Interval::new(f64::NEG_INFINITY, 0.0).exp();
     assert_eq!(exp.lo, 0.0);
     assert!(exp.hi >= 1.0 && exp.hi < 1.0 + 1e-15);
     assert_eq!(Interval::ENTIRE.sin(), Interval::new(-1.0, 1.0));
-    assert_eq!(Interval::new(0.0, 0.0).mul(Interval::ENTIRE), Interval::point(0.0));
+    assert_eq!(
+        Interval::new(0.0, 0.0).mul(Interval::ENTIRE),
+        Interval::point(0.0)
+    );
     let d = Interval::new(1.0, 2.0).div(Interval::new(0.0, 4.0));
     assert!(d.lo <= 0.25 && d.lo > 0.24 && d.hi == f64::INFINITY);
     let d = Interval::new(1.0, 2.0).div(Interval::new(-4.0, 0.0));

@@ -40,7 +40,12 @@ fn random_functions_keep_their_values() {
         let f = random_function(seed, 10);
         let g = simplify(&f);
         validate(&g).unwrap();
-        assert!(g.len() <= f.len(), "seed {seed}: simplify grew {} -> {}", f.len(), g.len());
+        assert!(
+            g.len() <= f.len(),
+            "seed {seed}: simplify grew {} -> {}",
+            f.len(),
+            g.len()
+        );
         if g.len() < f.len() {
             shrunk += 1;
         }
@@ -48,7 +53,11 @@ fn random_functions_keep_their_values() {
         for _ in 0..20 {
             let s = rng.pick(&[0.5, 2.0, 10.0]);
             let p = [rng.range(-s, s), rng.range(-s, s), rng.range(-s, s)];
-            let p = if rng.chance(0.1) { [0.0, p[1], -0.0] } else { p };
+            let p = if rng.chance(0.1) {
+                [0.0, p[1], -0.0]
+            } else {
+                p
+            };
             if a.point(p).is_finite() {
                 defined += 1;
             }
@@ -60,8 +69,14 @@ fn random_functions_keep_their_values() {
             );
         }
     }
-    assert!(shrunk > 100, "simplify shrank only {shrunk} of 400 functions");
-    assert!(defined > 2000, "only {defined} of 8000 points had a finite value");
+    assert!(
+        shrunk > 100,
+        "simplify shrank only {shrunk} of 400 functions"
+    );
+    assert!(
+        defined > 2000,
+        "only {defined} of 8000 points had a finite value"
+    );
 }
 
 #[test]
@@ -103,7 +118,11 @@ fn products_become_powers() {
     assert_eq!(g.op(g.root), &Op::Powi(ValueId(0), 4));
     assert_eq!(g.len(), 2);
     // The point of it: x·x·x·x over [-1, 1] is [-1, 1], x⁴ is [0, 1].
-    let bx = [Interval::new(-1.0, 1.0), Interval::point(0.0), Interval::point(0.0)];
+    let bx = [
+        Interval::new(-1.0, 1.0),
+        Interval::point(0.0),
+        Interval::point(0.0),
+    ];
     let before = Interpreter::new(f).interval(bx);
     let after = Interpreter::new(g).interval(bx);
     assert!(before.lo <= -1.0);
@@ -128,7 +147,10 @@ fn tangle_cube_gets_fourth_powers() {
     }
     let g = simplify(&b.finish(acc));
     assert_eq!(count(&g, |op| matches!(op, Op::Powi(_, 4))), 3);
-    assert_eq!(count(&g, |op| matches!(op, Op::Binary(BinaryOp::Mul, ..))), 6);
+    assert_eq!(
+        count(&g, |op| matches!(op, Op::Binary(BinaryOp::Mul, ..))),
+        6
+    );
 }
 
 #[test]
@@ -151,7 +173,10 @@ fn powers_of_powers_and_reciprocals() {
     let r = b.binary(BinaryOp::Add, r, z);
     let g = simplify(&b.finish(r));
     assert_eq!(count(&g, |op| matches!(op, Op::Powi(..))), 0);
-    assert_eq!(count(&g, |op| matches!(op, Op::Unary(UnaryOp::Square, _))), 1);
+    assert_eq!(
+        count(&g, |op| matches!(op, Op::Unary(UnaryOp::Square, _))),
+        1
+    );
     assert!(g.ops.contains(&Op::Const(1.0)));
 }
 
@@ -188,7 +213,10 @@ fn identities_that_are_exact_apply_and_others_do_not() {
     let r = b.binary(BinaryOp::Add, p, q);
     let g = simplify(&b.finish(r));
     assert!(g.ops.contains(&Op::Const(0.25)));
-    assert_eq!(count(&g, |op| matches!(op, Op::Binary(BinaryOp::Div, ..))), 1);
+    assert_eq!(
+        count(&g, |op| matches!(op, Op::Binary(BinaryOp::Div, ..))),
+        1
+    );
 }
 
 #[test]
@@ -217,7 +245,10 @@ fn folds_exact_constants_only() {
     assert!(!g.ops.contains(&Op::Const(0.1 + 0.2)));
     assert_eq!(count(&g, |op| matches!(op, Op::Unary(UnaryOp::Sqrt, _))), 1);
     assert_eq!(count(&g, |op| matches!(op, Op::Unary(UnaryOp::Exp, _))), 1);
-    assert_eq!(count(&g, |op| matches!(op, Op::Binary(BinaryOp::Add, ..))), 5);
+    assert_eq!(
+        count(&g, |op| matches!(op, Op::Binary(BinaryOp::Add, ..))),
+        5
+    );
 }
 
 #[test]
@@ -256,5 +287,8 @@ fn cse_merges_duplicates_built_without_hash_consing() {
     };
     let g = cse(&f);
     assert_eq!(g.len(), 3);
-    assert_eq!(g.op(g.root), &Op::Binary(BinaryOp::Add, ValueId(1), ValueId(1)));
+    assert_eq!(
+        g.op(g.root),
+        &Op::Binary(BinaryOp::Add, ValueId(1), ValueId(1))
+    );
 }

@@ -97,10 +97,13 @@ pub fn powi_fn(n: i32) -> Function {
     b.finish(r)
 }
 
+/// The point semantics of a single-op function of (x, y).
+pub type Reference = Box<dyn Fn(f64, f64) -> f64>;
+
 /// Every single-op function with its point semantics: (name, function,
 /// reference of (x, y)).
-pub fn single_op_functions() -> Vec<(String, Function, Box<dyn Fn(f64, f64) -> f64>)> {
-    let mut v: Vec<(String, Function, Box<dyn Fn(f64, f64) -> f64>)> = Vec::new();
+pub fn single_op_functions() -> Vec<(String, Function, Reference)> {
+    let mut v: Vec<(String, Function, Reference)> = Vec::new();
     for op in UNARY_OPS {
         v.push((
             format!("{op:?}"),
@@ -185,7 +188,10 @@ pub fn check_point_ops(make: Make) {
             for &y in &EDGE_VALUES {
                 let want = reference(x, y);
                 let got = e.point([x, y, 0.5]);
-                assert!(same(got, want), "{name}({x:e}, {y:e}) = {got:e}, want {want:e}");
+                assert!(
+                    same(got, want),
+                    "{name}({x:e}, {y:e}) = {got:e}, want {want:e}"
+                );
                 let g = e.point_grad([x, y, 0.5]);
                 assert!(same(g.v, want), "{name}({x:e}, {y:e}) grad value {:e}", g.v);
             }
@@ -304,7 +310,12 @@ pub fn check_interval_grad_contains(e: &dyn Evaluator, p: [f64; 3], r: f64, what
     for q in box_points(b, &mut rng, 4) {
         let g = e.point_grad(q);
         if g.v.is_finite() {
-            assert!(ig.v.contains(g.v), "{what}: value {:e} at {q:?} not in {:?}", g.v, ig.v);
+            assert!(
+                ig.v.contains(g.v),
+                "{what}: value {:e} at {q:?} not in {:?}",
+                g.v,
+                ig.v
+            );
         }
         for k in 0..3 {
             if g.d[k].is_finite() {
@@ -326,6 +337,8 @@ pub fn check_interval_grad_contains(e: &dyn Evaluator, p: [f64; 3], r: f64, what
 /// gradients match finite differences where f looks smooth.
 pub fn check_random_functions(make: Make, seeds: std::ops::Range<u64>) {
     let mut rng = Rng::new(seeds.start);
+    let n_seeds = seeds.end - seeds.start;
+    let mut compared = 0;
     for seed in seeds {
         let f = random_function(seed, 8);
         let e = make(&f);
@@ -342,9 +355,16 @@ pub fn check_random_functions(make: Make, seeds: std::ops::Range<u64>) {
             for q in box_points(b, &mut rng, 6) {
                 let want = Evaluator::point(&reference, q);
                 let v = e.point(q);
-                assert!(same(v, want), "seed {seed} at {q:?}: {v:e}, interpreter {want:e}");
+                assert!(
+                    same(v, want),
+                    "seed {seed} at {q:?}: {v:e}, interpreter {want:e}"
+                );
                 let g = e.point_grad(q);
-                assert!(same(g.v, want), "seed {seed} at {q:?}: grad value {:e}", g.v);
+                assert!(
+                    same(g.v, want),
+                    "seed {seed} at {q:?}: grad value {:e}",
+                    g.v
+                );
                 if !reference.point_values(q).iter().all(|v| v.is_finite()) {
                     continue;
                 }
@@ -365,12 +385,26 @@ pub fn check_random_functions(make: Make, seeds: std::ops::Range<u64>) {
             }
         }
         for _ in 0..3 {
-            let p = [rng.range(-2.0, 2.0), rng.range(-2.0, 2.0), rng.range(-2.0, 2.0)];
-            if reference.point_values(p).iter().all(|v| v.is_finite() && v.abs() < 1e6) {
-                check_gradient_at(e.as_ref(), p, &format!("seed {seed}"));
+            let p = [
+                rng.range(-2.0, 2.0),
+                rng.range(-2.0, 2.0),
+                rng.range(-2.0, 2.0),
+            ];
+            if reference
+                .point_values(p)
+                .iter()
+                .all(|v| v.is_finite() && v.abs() < 1e6)
+            {
+                compared += check_gradient_at(e.as_ref(), p, &format!("seed {seed}"));
             }
         }
     }
+    // Many random functions are undefined or non-smooth at random points;
+    // enough of them must still be compared for the check to mean anything.
+    assert!(
+        compared as u64 >= n_seeds / 2,
+        "only {compared} partials compared with finite differences over {n_seeds} functions"
+    );
 }
 
 /// The whole suite.
