@@ -404,9 +404,17 @@ thread_local! {
 }
 
 impl Interpreter {
-    /// An interpreter for `f` (which must be valid IR).
+    /// An interpreter for `f`, which must be valid IR (checked in debug
+    /// builds; see [`Interpreter::try_new`] for untrusted input).
     pub fn new(f: Function) -> Interpreter {
+        super::validate::debug_validate(&f, "Interpreter::new");
         Interpreter { f }
+    }
+
+    /// An interpreter for `f`, or why `f` is not valid IR.
+    pub fn try_new(f: Function) -> Result<Interpreter, super::validate::InvalidIr> {
+        super::validate::validate(&f)?;
+        Ok(Interpreter { f })
     }
 
     /// The function it evaluates.
