@@ -15,10 +15,20 @@
 //! An op takes only the defined part of its domain: `sqrt([-1, 4]) = [0, 2]`,
 //! `ln([-1, e]) = [-inf, 1]`, `pow` with a negative base part uses the
 //! non-negative part. An op with no defined part returns [`Interval::EMPTY`]
-//! (both bounds NaN), and EMPTY propagates through every op, so a box on
-//! which f is undefined everywhere is rejected (it holds no root).
-//! Division by an interval containing 0 returns the whole line.
+//! (both bounds NaN), and EMPTY propagates through every op (but `powi(_, 0)`,
+//! which is 1 at every point, NaN included), so a box on which f is
+//! undefined everywhere is rejected (it holds no root).
+//! Division takes the nonzero part of the divisor: the whole line when 0 is
+//! inside it, a half-line when 0 is one of its ends, EMPTY for [0, 0].
 //! Infinities are not real values: a bound at ±inf means "unbounded".
+//!
+//! # Transcendentals
+//! exp, ln, sin, cos, atan2 and pow (in `transcendental.rs`) bound libm at
+//! the ends (corners for atan2 and pow), widened by [`TRANSCENDENTAL_ULPS`]
+//! ulps with [`widen_down`] / [`widen_up`], plus the extrema the argument
+//! reaches: sin and cos find the multiples of π/2 inside the interval
+//! (arguments beyond 1e15 in magnitude give [-1, 1]); atan2 gives [-π, π]
+//! when the box touches its branch cut (x ≤ 0, y = 0).
 
 /// A closed interval `[lo, hi]`; both bounds NaN is the empty set.
 #[derive(Copy, Clone, Debug, PartialEq)]
@@ -328,3 +338,4 @@ impl Interval {
 }
 
 mod transcendental;
+pub use transcendental::{widen_down, widen_up};

@@ -1,7 +1,7 @@
 //! Simplification passes, each a function from IR to IR.
 //!
 //! Every pass takes a `&Function` and returns a new [`Function`]; none keeps
-//! state between calls, and [`validate::debug_validate`] checks the result.
+//! state between calls, and [`super::validate::debug_validate`] checks the result.
 //! [`simplify`] runs the list [`PASSES`] to a fixed point.
 //!
 //! # What a pass may change
