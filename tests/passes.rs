@@ -147,10 +147,18 @@ fn tangle_cube_gets_fourth_powers() {
     }
     let g = simplify(&b.finish(acc));
     assert_eq!(count(&g, |op| matches!(op, Op::Powi(_, 4))), 3);
+    // 5·x·x becomes 5·x², tighter over boxes holding 0.
+    assert_eq!(
+        count(&g, |op| matches!(op, Op::Unary(UnaryOp::Square, _))),
+        3
+    );
     assert_eq!(
         count(&g, |op| matches!(op, Op::Binary(BinaryOp::Mul, ..))),
-        6
+        3
     );
+    let bx = [Interval::new(-0.1, 0.1); 3];
+    let r = Interpreter::new(g).interval(bx);
+    assert!(r.lo > 11.0 && r.hi < 11.81, "{r:?}");
 }
 
 #[test]

@@ -33,9 +33,11 @@
 //! `x·x → x²`, `powi(x, 2) → x²`, `powi(x, 1) → x`, `powi(x, 0) → 1` and
 //! `1 / x^n → x^-n` are bit-exact (our `powi` is binary exponentiation).
 //! Products of powers of one value (`x·x·x·x`, `x²·x`, `(x²)²`, `(x³)²`)
-//! become one `powi` with the summed (multiplied) positive exponent: exact
-//! in real arithmetic, rounding may differ by a few ulps, and the interval
-//! is much tighter (x·x·x·x over [-1, 1] is [-1, 1]; x⁴ is [0, 1]).
+//! become one `powi` with the summed (multiplied) positive exponent, and a
+//! constant factor is pulled out of the chain (`5·x·x → 5·x²`): exact in
+//! real arithmetic, rounding may differ by a few ulps, and the interval is
+//! much tighter (x·x·x·x over [-1, 1] is [-1, 1], x⁴ is [0, 1]; 5·x·x is
+//! [-5, 5], 5·x² is [0, 5]).
 //!
 //! # Constant folding
 //! An op of constants is replaced by its value only when that value is the
@@ -376,12 +378,37 @@ fn power(b: &mut Builder, base: ValueId, k: i64) -> ValueId {
     }
 }
 
+// `v` as coefficient·base^k, the coefficient a constant factor of a
+// product (`5·x` is (5, x, 1)).
+fn as_scaled_power(b: &Builder, v: ValueId) -> (Option<ValueId>, ValueId, i64) {
+    if let Op::Binary(BinaryOp::Mul, p, q) = *b.op(v) {
+        for (c, rest) in [(p, q), (q, p)] {
+            if constant(b, c).is_some() && constant(b, rest).is_none() {
+                let (base, k) = as_power(b, rest);
+                return (Some(c), base, k);
+            }
+        }
+    }
+    let (base, k) = as_power(b, v);
+    (None, base, k)
+}
+
 fn specialised(b: &mut Builder, op: Op) -> Option<ValueId> {
     match op {
         Op::Binary(BinaryOp::Mul, x, y) => {
-            let (bx, kx) = as_power(b, x);
-            let (by, ky) = as_power(b, y);
-            (bx == by && kx + ky <= MAX_CHAIN_POWER).then(|| power(b, bx, kx + ky))
+            // (c·x^i)·x^j → c·x^(i+j): one coefficient at most, so no
+            // product of constants (which might round) is formed.
+            let (cx, bx, kx) = as_scaled_power(b, x);
+            let (cy, by, ky) = as_scaled_power(b, y);
+            let one_coefficient = cx.is_none() || cy.is_none();
+            if bx != by || !one_coefficient || kx + ky > MAX_CHAIN_POWER {
+                return None;
+            }
+            let p = power(b, bx, kx + ky);
+            Some(match cx.or(cy) {
+                Some(c) => b.binary(BinaryOp::Mul, c, p),
+                None => p,
+            })
         }
         Op::Binary(BinaryOp::Div, x, y) if is_const(b, x, 1.0) => {
             let (base, k) = as_power(b, y);
