@@ -212,13 +212,19 @@ fn exact_div(a: f64, b: f64) -> Option<f64> {
 }
 
 fn exact_powi(a: f64, n: i32) -> Option<f64> {
-    let mut r = 1.0f64;
-    for _ in 0..n.unsigned_abs() {
-        r = exact_mul(r, a)?;
+    // Binary exponentiation with every product checked exact: then the
+    // result is the real power, whatever the order of the products.
+    let (mut r, mut base, mut m) = (1.0f64, a, n.unsigned_abs());
+    while m > 0 {
+        if m & 1 == 1 {
+            r = exact_mul(r, base)?;
+        }
+        m >>= 1;
+        if m > 0 {
+            base = exact_mul(base, base)?;
+        }
     }
     let r = if n < 0 { exact_div(1.0, r)? } else { r };
-    // Every step exact: the real power, which binary exponentiation also
-    // gets exactly.
     (r.to_bits() == point_powi(a, n).to_bits()).then_some(r)
 }
 
@@ -448,5 +454,9 @@ mod tests {
         assert_eq!(exact_div(1.0, 3.0), None);
         assert_eq!(exact_powi(2.0, -3), Some(0.125));
         assert_eq!(exact_powi(3.0, 40), None);
+        assert_eq!(exact_powi(3.0, 5), Some(243.0));
+        // Must not loop 2^31 times.
+        assert_eq!(exact_powi(1.0, i32::MIN), Some(1.0));
+        assert_eq!(exact_powi(-1.0, i32::MAX), Some(-1.0));
     }
 }
