@@ -15,10 +15,20 @@
 //! An op takes only the defined part of its domain: `sqrt([-1, 4]) = [0, 2]`,
 //! `ln([-1, e]) = [-inf, 1]`, `pow` with a negative base part uses the
 //! non-negative part. An op with no defined part returns [`Interval::EMPTY`]
-//! (both bounds NaN), and EMPTY propagates through every op, so a box on
-//! which f is undefined everywhere is rejected (it holds no root).
-//! Division by an interval containing 0 returns the whole line.
+//! (both bounds NaN), and EMPTY propagates through every op (but `powi(_, 0)`,
+//! which is 1 at every point, NaN included), so a box on which f is
+//! undefined everywhere is rejected (it holds no root).
+//! Division takes the nonzero part of the divisor: the whole line when 0 is
+//! inside it, a half-line when 0 is one of its ends, EMPTY for [0, 0].
 //! Infinities are not real values: a bound at ±inf means "unbounded".
+//!
+//! # Transcendentals
+//! exp, ln, sin, cos, atan2 and pow (in `transcendental.rs`) bound libm at
+//! the ends (corners for atan2 and pow), widened by [`TRANSCENDENTAL_ULPS`]
+//! ulps with [`widen_down`] / [`widen_up`], plus the extrema the argument
+//! reaches: sin and cos find the multiples of π/2 inside the interval
+//! (arguments beyond 1e15 in magnitude give [-1, 1]); atan2 gives [-π, π]
+//! when the box touches its branch cut (x ≤ 0, y = 0).
 
 /// A closed interval `[lo, hi]`; both bounds NaN is the empty set.
 #[derive(Copy, Clone, Debug, PartialEq)]
@@ -155,6 +165,9 @@ fn powi_unsigned(x: f64, mut n: u32, round: impl Fn(f64) -> f64) -> f64 {
     result
 }
 
+// Named methods rather than operator traits: every call site of an
+// outward-rounded op stays visible as such.
+#[allow(clippy::should_implement_trait)]
 impl Interval {
     /// `-self` (exact).
     pub fn neg(self) -> Interval {
@@ -182,17 +195,51 @@ impl Interval {
         ];
         let lo = min_ignore_nan(min_ignore_nan(p[0], p[1]), min_ignore_nan(p[2], p[3]));
         let hi = max_ignore_nan(max_ignore_nan(p[0], p[1]), max_ignore_nan(p[2], p[3]));
+        if lo.is_nan() {
+            // All four products are 0·inf: one operand is [0, 0] and the
+            // other has only infinite bounds, so every real product is 0.
+            return if self.is_empty() || o.is_empty() {
+                Interval::EMPTY
+            } else {
+                Interval::point(0.0)
+            };
+        }
         Interval::new(down(lo), up(hi))
     }
 
-    /// `self / o`: the whole line when `o` contains 0 (EMPTY when o = [0, 0],
-    /// where no quotient is real).
+    /// `self / o` over the nonzero part of `o` (a quotient by 0 is not
+    /// real): EMPTY when o = [0, 0], a half-line when 0 is an end of `o`,
+    /// the whole line when 0 is inside `o` (unless self = [0, 0]).
     pub fn div(self, o: Interval) -> Interval {
         if self.is_empty() || o.is_empty() || (o.lo == 0.0 && o.hi == 0.0) {
             return Interval::EMPTY;
         }
         if o.lo <= 0.0 && 0.0 <= o.hi {
-            return Interval::ENTIRE;
+            if self.lo == 0.0 && self.hi == 0.0 {
+                return Interval::point(0.0);
+            }
+            if o.lo < 0.0 && 0.0 < o.hi {
+                return Interval::ENTIRE;
+            }
+            // 0 is an end of o: the divisor keeps one sign, o = [0+, hi] or
+            // [lo, 0-], and the quotient is bounded on one side.
+            let positive = o.lo == 0.0;
+            let d = if positive { o.hi } else { o.lo };
+            return if self.lo >= 0.0 {
+                if positive {
+                    Interval::new(down(self.lo / d).max(0.0), f64::INFINITY)
+                } else {
+                    Interval::new(f64::NEG_INFINITY, up(self.lo / d).min(0.0))
+                }
+            } else if self.hi <= 0.0 {
+                if positive {
+                    Interval::new(f64::NEG_INFINITY, up(self.hi / d).min(0.0))
+                } else {
+                    Interval::new(down(self.hi / d).max(0.0), f64::INFINITY)
+                }
+            } else {
+                Interval::ENTIRE
+            };
         }
         let q = [
             self.lo / o.lo,
@@ -207,7 +254,9 @@ impl Interval {
 
     /// `|self|` (exact).
     pub fn abs(self) -> Interval {
-        if self.lo >= 0.0 {
+        if self.is_empty() {
+            Interval::EMPTY
+        } else if self.lo >= 0.0 {
             self
         } else if self.hi <= 0.0 {
             self.neg()
@@ -267,7 +316,7 @@ impl Interval {
     fn powi_positive(self, n: u32) -> Interval {
         let up_pow = |m: f64| powi_unsigned(m, n, up);
         let down_pow = |m: f64| powi_unsigned(m, n, |v| down(v).max(0.0));
-        if n % 2 == 0 {
+        if n.is_multiple_of(2) {
             let a = self.abs();
             let lo = if n == 1 { a.lo } else { down_pow(a.lo) };
             Interval::new(lo, up_pow(a.hi))
@@ -288,38 +337,5 @@ impl Interval {
     }
 }
 
-// PLACEHOLDERS (to be replaced by the real transcendental bounds): sound but
-// useless answers so the rest of the crate compiles.
-impl Interval {
-    fn entire_unless_empty(self) -> Interval {
-        if self.is_empty() {
-            Interval::EMPTY
-        } else {
-            Interval::ENTIRE
-        }
-    }
-    /// `exp(self)`.
-    pub fn exp(self) -> Interval {
-        self.entire_unless_empty()
-    }
-    /// `ln(self)` over the non-negative part.
-    pub fn ln(self) -> Interval {
-        self.entire_unless_empty()
-    }
-    /// `sin(self)`.
-    pub fn sin(self) -> Interval {
-        self.entire_unless_empty()
-    }
-    /// `cos(self)`.
-    pub fn cos(self) -> Interval {
-        self.entire_unless_empty()
-    }
-    /// `atan2(self, x)`: the angle of the points (x, self).
-    pub fn atan2(self, x: Interval) -> Interval {
-        self.add(x).entire_unless_empty()
-    }
-    /// `self^e` = exp(e ln self) over the non-negative part of self.
-    pub fn pow(self, e: Interval) -> Interval {
-        self.add(e).entire_unless_empty()
-    }
-}
+mod transcendental;
+pub use transcendental::{widen_down, widen_up};

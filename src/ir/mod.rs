@@ -22,6 +22,7 @@ pub mod interp;
 pub mod lower;
 pub mod passes;
 pub mod print;
+pub mod random;
 pub mod validate;
 
 use std::collections::HashMap;

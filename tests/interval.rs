@@ -1,0 +1,295 @@
+//! Interval arithmetic against inari (tightest outward rounding) and
+//! against sampled point values.
+//!
+//! inari is built without its `gmp` feature, which is where its
+//! transcendentals live, so exp, ln, sin, cos, atan2 and pow are checked by
+//! containment of sampled point values (including points placed on their
+//! extrema, at huge arguments and on the atan2 branch cut) and by a width
+//! bound on degenerate intervals.
+
+use ibeam::eval::Evaluator;
+use ibeam::interval::{Interval, TRANSCENDENTAL_ULPS};
+use ibeam::ir::interp::{
+    Interpreter, interval_binary, interval_unary, point_binary, point_powi, point_unary,
+};
+use ibeam::ir::random::{BINARY_OPS, UNARY_OPS, random_function};
+use ibeam::ir::{BinaryOp, UnaryOp};
+use proptest::prelude::*;
+
+fn bound() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        3 => -10.0..10.0f64,
+        1 => prop::sample::select(vec![
+            0.0, -0.0, 1.0, -1.0, 0.5, 2.0, f64::INFINITY, f64::NEG_INFINITY,
+            f64::MAX, f64::MIN, f64::MIN_POSITIVE, 5e-324, -5e-324, 1e300, -1e300, 1e-300,
+        ]),
+        1 => prop::num::f64::NORMAL | prop::num::f64::SUBNORMAL | prop::num::f64::ZERO,
+        1 => -1e6..1e6f64,
+    ]
+}
+
+/// Intervals with lo <= hi, lo < +inf, hi > -inf (inari's valid intervals).
+fn interval() -> impl Strategy<Value = Interval> {
+    (bound(), bound()).prop_map(|(a, b)| {
+        let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
+        let lo = if lo == f64::INFINITY { f64::MAX } else { lo };
+        let hi = if hi == f64::NEG_INFINITY {
+            f64::MIN
+        } else {
+            hi
+        };
+        Interval::new(lo, hi)
+    })
+}
+
+fn to_inari(i: Interval) -> inari::Interval {
+    inari::Interval::try_from((i.lo, i.hi)).expect("valid interval")
+}
+
+fn down2(v: f64) -> f64 {
+    v.next_down().next_down()
+}
+
+fn up2(v: f64) -> f64 {
+    v.next_up().next_up()
+}
+
+/// Ours contains inari's tightest result and is at most 2 ulps wider on
+/// each side.
+fn assert_tight(ours: Interval, theirs: inari::Interval, what: &str) {
+    if theirs.is_empty() {
+        assert!(ours.is_empty(), "{what}: {ours:?}, inari EMPTY");
+        return;
+    }
+    let (lo, hi) = (theirs.inf(), theirs.sup());
+    assert!(
+        ours.lo <= lo && hi <= ours.hi,
+        "{what}: {ours:?} does not contain inari's [{lo:e}, {hi:e}]"
+    );
+    assert!(
+        ours.lo >= down2(lo) && ours.hi <= up2(hi),
+        "{what}: {ours:?} much wider than inari's [{lo:e}, {hi:e}]"
+    );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 2000,
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    #[test]
+    fn arithmetic_matches_inari(a in interval(), b in interval()) {
+        let (ia, ib) = (to_inari(a), to_inari(b));
+        assert_tight(a.add(b), ia + ib, &format!("{a:?} + {b:?}"));
+        assert_tight(a.sub(b), ia - ib, &format!("{a:?} - {b:?}"));
+        assert_tight(a.mul(b), ia * ib, &format!("{a:?} * {b:?}"));
+        assert_tight(a.div(b), ia / ib, &format!("{a:?} / {b:?}"));
+        assert_tight(a.min(b), ia.min(ib), &format!("min {a:?} {b:?}"));
+        assert_tight(a.max(b), ia.max(ib), &format!("max {a:?} {b:?}"));
+        assert_tight(a.sqrt(), ia.sqrt(), &format!("sqrt {a:?}"));
+        assert_tight(a.square(), ia.sqr(), &format!("square {a:?}"));
+        assert_tight(a.abs(), ia.abs(), &format!("abs {a:?}"));
+        assert_tight(a.neg(), -ia, &format!("neg {a:?}"));
+    }
+
+    #[test]
+    fn every_op_contains_sampled_points(
+        a in interval(),
+        b in interval(),
+        ts in prop::collection::vec(0.0..=1.0f64, 4),
+        n in -4i32..=6,
+    ) {
+        let pick = |i: Interval, t: f64| {
+            let (lo, hi) = (i.lo.max(f64::MIN), i.hi.min(f64::MAX));
+            (lo * (1.0 - t) + hi * t).clamp(lo, hi)
+        };
+        let xs = [a.lo, a.hi, pick(a, ts[0]), pick(a, ts[1]), if a.contains(0.0) { 0.0 } else { a.lo }];
+        let ys = [b.lo, b.hi, pick(b, ts[2]), pick(b, ts[3]), if b.contains(0.0) { 0.0 } else { b.lo }];
+        for op in UNARY_OPS {
+            let r = interval_unary(op, a);
+            for &x in &xs {
+                let v = point_unary(op, x);
+                prop_assert!(!x.is_finite() || !v.is_finite() || r.contains(v),
+                    "{op:?} {a:?} = {r:?} misses f({x:e}) = {v:e}");
+            }
+        }
+        for op in BINARY_OPS {
+            let r = interval_binary(op, a, b);
+            for &x in &xs {
+                for &y in &ys {
+                    let v = point_binary(op, x, y);
+                    prop_assert!(!x.is_finite() || !y.is_finite() || !v.is_finite() || r.contains(v),
+                        "{op:?} {a:?} {b:?} = {r:?} misses f({x:e}, {y:e}) = {v:e}");
+                }
+            }
+        }
+        let r = a.powi(n);
+        for &x in &xs {
+            let v = point_powi(x, n);
+            prop_assert!(!x.is_finite() || !v.is_finite() || r.contains(v),
+                "powi {a:?} {n} = {r:?} misses {v:e} at {x:e}");
+        }
+    }
+
+    #[test]
+    fn trig_extrema_far_out(k in 0u64..100_000_000_000_000, half in any::<bool>(), d in 1e-9..1.0f64, t in 0.0..=1.0f64) {
+        // An interval around k·π (or k·π + π/2) must reach the extremum there:
+        // the point of the interval closest to it is sampled.
+        let centre = k as f64 * std::f64::consts::PI + if half { std::f64::consts::FRAC_PI_2 } else { 0.0 };
+        let i = Interval::new(centre - d, centre + d * t);
+        for op in [UnaryOp::Sin, UnaryOp::Cos] {
+            let r = interval_unary(op, i);
+            for x in [i.lo, i.hi, centre, centre.next_up(), centre.next_down(), i.mid()] {
+                if i.contains(x) {
+                    let v = point_unary(op, x);
+                    prop_assert!(r.contains(v), "{op:?} {i:?} = {r:?} misses f({x:e}) = {v:e}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn atan2_near_the_cut(y0 in -1.0..1.0f64, w in 0.0..1.0f64, x0 in -2.0..2.0f64, v in 0.0..1.0f64) {
+        let (y, x) = (Interval::new(y0, y0 + w), Interval::new(x0, x0 + v));
+        let r = y.atan2(x);
+        for py in [y.lo, y.hi, y.mid(), 0.0, -0.0] {
+            for px in [x.lo, x.hi, x.mid(), 0.0] {
+                if y.contains(py) && x.contains(px) {
+                    let a = point_binary(BinaryOp::Atan2, py, px);
+                    prop_assert!(r.contains(a), "atan2({y:?}, {x:?}) = {r:?} misses {a:e} at ({py:e}, {px:e})");
+                }
+            }
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 300,
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    #[test]
+    fn random_functions_enclose_points(
+        seed in any::<u64>(),
+        bx in prop::array::uniform3(interval()),
+        ts in prop::collection::vec(prop::array::uniform3(0.0..=1.0f64), 8),
+    ) {
+        // Points where every intermediate value is real must be enclosed;
+        // elsewhere f is undefined and nothing is promised.
+        let f = random_function(seed, 8);
+        let it = Interpreter::new(f);
+        let r = it.interval(bx);
+        for t in ts {
+            let p = [0, 1, 2].map(|k| {
+                let (lo, hi) = (bx[k].lo.max(f64::MIN), bx[k].hi.min(f64::MAX));
+                (lo * (1.0 - t[k]) + hi * t[k]).clamp(lo, hi)
+            });
+            if it.point_values(p).iter().all(|v| v.is_finite()) {
+                let v = it.point(p);
+                prop_assert!(r.contains(v), "seed {seed}: f{p:?} = {v:e} not in {r:?} over {bx:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn transcendentals_are_tight_on_points() {
+    // On a point the result is the libm value widened by TRANSCENDENTAL_ULPS
+    // ulps, clamped: at most 2·ULPS+1 representable numbers wide.
+    let steps = 2 * TRANSCENDENTAL_ULPS as usize;
+    let within = |r: Interval, what: &str| {
+        let mut v = r.lo;
+        for _ in 0..steps {
+            v = v.next_up();
+        }
+        assert!(r.hi <= v, "{what}: {r:?} is more than {steps} ulps wide");
+    };
+    for &x in &[0.1, 0.5, 1.0, 2.0, 3.0, 10.0, 700.0, 1e-5, 123.456] {
+        let p = Interval::point(x);
+        for op in [UnaryOp::Exp, UnaryOp::Ln, UnaryOp::Sin, UnaryOp::Cos] {
+            within(interval_unary(op, p), &format!("{op:?}({x})"));
+        }
+        for &y in &[0.3, 1.5, -2.0] {
+            let q = Interval::point(y);
+            within(p.atan2(q), &format!("atan2({x}, {y})"));
+            within(p.pow(q), &format!("pow({x}, {y})"));
+        }
+    }
+}
+
+#[test]
+fn edge_results() {
+    let e = Interval::EMPTY;
+    for op in UNARY_OPS {
+        assert!(interval_unary(op, e).is_empty(), "{op:?} of EMPTY");
+    }
+    for op in BINARY_OPS {
+        assert!(
+            interval_binary(op, e, Interval::new(1.0, 2.0)).is_empty(),
+            "{op:?}(EMPTY, x)"
+        );
+        assert!(
+            interval_binary(op, Interval::new(1.0, 2.0), e).is_empty(),
+            "{op:?}(x, EMPTY)"
+        );
+    }
+    assert!(Interval::new(-3.0, -1.0).ln().is_empty());
+    assert!(Interval::new(-3.0, -1.0).sqrt().is_empty());
+    assert!(
+        Interval::new(-3.0, -1.0)
+            .pow(Interval::point(0.5))
+            .is_empty()
+    );
+    let exp = Interval::new(f64::NEG_INFINITY, 0.0).exp();
+    assert_eq!(exp.lo, 0.0);
+    assert!(exp.hi >= 1.0 && exp.hi < 1.0 + 1e-15);
+    assert_eq!(Interval::ENTIRE.sin(), Interval::new(-1.0, 1.0));
+    assert_eq!(
+        Interval::new(0.0, 0.0).mul(Interval::ENTIRE),
+        Interval::point(0.0)
+    );
+    let d = Interval::new(1.0, 2.0).div(Interval::new(0.0, 4.0));
+    assert!(d.lo <= 0.25 && d.lo > 0.24 && d.hi == f64::INFINITY);
+    let d = Interval::new(1.0, 2.0).div(Interval::new(-4.0, 0.0));
+    assert!(d.hi >= -0.25 && d.hi < -0.24 && d.lo == f64::NEG_INFINITY);
+    // sin over [0, π] reaches 1 but stays at or above sin(π) ≈ 1.2e-16 - ulps.
+    let s = Interval::new(0.0, std::f64::consts::PI).sin();
+    assert_eq!(s.hi, 1.0);
+    assert!(s.lo <= 0.0 && s.lo > -1e-15);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 3000,
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    /// A second, independent implementation (the platform's libm behind
+    /// `std`) must land inside our widened bounds on point intervals: both
+    /// are within 1 ulp of the real value, ours is widened by 2.
+    #[test]
+    fn platform_libm_inside_point_bounds(
+        x in prop_oneof![-20.0..20.0f64, -1e6..1e6f64, -745.0..710.0f64, 1e-300..1e-10f64],
+        y in prop_oneof![-20.0..20.0f64, 1e-3..10.0f64],
+    ) {
+        let p = Interval::point(x);
+        let q = Interval::point(y);
+        let check = |r: Interval, v: f64, what: &str| {
+            assert!(!v.is_finite() || r.contains(v), "{what}: std gives {v:e}, ours {r:?}");
+        };
+        check(p.exp(), x.exp(), &format!("exp {x:e}"));
+        check(p.sin(), x.sin(), &format!("sin {x:e}"));
+        check(p.cos(), x.cos(), &format!("cos {x:e}"));
+        check(p.atan2(q), x.atan2(y), &format!("atan2 {x:e} {y:e}"));
+        let ax = x.abs();
+        check(Interval::point(ax).ln(), ax.ln(), &format!("ln {ax:e}"));
+        if (ax * y.abs()) < 300.0 {
+            check(Interval::point(ax).pow(q), ax.powf(y), &format!("pow {ax:e} {y:e}"));
+        }
+    }
+}
