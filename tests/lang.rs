@@ -300,3 +300,278 @@ fn comments_and_whitespace() {
     let s = scene("// a comment\nobject o = // trailing\n  sphere(1); // end");
     assert_eq!(s.objects.len(), 1);
 }
+
+// ------------------------------------------------------------ diagnostics
+
+#[test]
+fn unexpected_token() {
+    let e = assert_err("object o = sphere(1) +;", "unexpected `;`", 1, 23);
+    assert!(e.help.unwrap().contains("a number"));
+    assert_err("object o = sphere(1);\ncamera { eye = (1, 2, 3) }", "unexpected `}`", 2, 26);
+    assert_err("object o = x y;", "unexpected name `y`", 1, 14);
+    assert_err("object o = x @ y;", "unexpected character `@`", 1, 14);
+}
+
+#[test]
+fn unterminated_input() {
+    let e = assert_err("object o = (x + 1", "unexpected end of input", 1, 18);
+    assert!(e.help.unwrap().contains("`)`"));
+    assert_err("object o = sphere(1)\n", "unexpected end of input", 1, 21);
+}
+
+#[test]
+fn unknown_names_suggest_a_fix() {
+    let e = assert_err("object o = sphre(1);", "unknown function `sphre`", 1, 12);
+    assert_eq!(e.help.as_deref(), Some("did you mean `sphere`?"));
+    assert!(e.rendered.contains("help: did you mean `sphere`?"));
+    let e = assert_err("let radius = 1;\nobject o = sphere(raduis);", "unknown variable `raduis`", 2, 19);
+    assert_eq!(e.help.as_deref(), Some("did you mean `radius`?"));
+    let e = assert_err("object o = w + 1;", "unknown variable `w`", 1, 12);
+    assert!(e.help.is_none() || e.help.as_deref().is_some_and(|h| h.contains("did you mean")));
+    let e = assert_err("fn f(size) = x - sise; object o = f(1);", "unknown variable `sise`", 1, 18);
+    assert_eq!(e.help.as_deref(), Some("did you mean `size`?"));
+    let e = assert_err("object o = qqqqqq(x);", "unknown function `qqqqqq`", 1, 12);
+    assert_eq!(e.help, None);
+}
+
+#[test]
+fn wrong_arity() {
+    let e = assert_err("object o = sphere(1, 2);", "`sphere` takes 1 argument, but 2 were given", 1, 12);
+    assert_eq!(e.help.as_deref(), Some("call it as `sphere(r)`"));
+    assert_err("object o = min(x);", "`min` takes at least 2 arguments, but 1 was given", 1, 12);
+    assert_err("object o = x +\n  sqrt(x, y);", "`sqrt` takes 1 argument, but 2 were given", 2, 3);
+    assert_err("fn f(a, b) = a + b;\nobject o = f(x);", "`f` takes 2 arguments, but 1 was given", 2, 12);
+    assert_err("object o = blend(x, y);", "`blend` takes 3 arguments", 1, 12);
+}
+
+#[test]
+fn recursion() {
+    let e = assert_err("fn f(a) = f(a) + x;\nobject o = f(1);", "recursive use of `f` (f -> f)", 1, 11);
+    assert!(e.help.unwrap().contains("inlined"));
+    assert_err(
+        "fn f(a) = g(a);\nfn g(b) = f(b) + x;\nobject o = f(x);",
+        "mutually recursive use of `f` (f -> g -> f)",
+        2,
+        11,
+    );
+    assert_err("let a = b + x;\nlet b = a;\nobject o = a;", "mutually recursive use of `a`", 2, 9);
+}
+
+#[test]
+fn duplicate_definitions() {
+    let e = assert_err("let a = 1;\nlet a = 2;\nobject o = x;", "`a` is defined twice", 2, 5);
+    assert!(e.rendered.contains("first defined here"));
+    assert_err("fn sphere(r) = x;\nobject o = x;", "`sphere` is defined twice", 1, 4);
+    assert_err("object o = x;\nobject o = y;", "object `o` is defined twice", 2, 8);
+    assert_err("fn f(a, a) = a; object o = x;", "parameter `a` is defined twice", 1, 9);
+    assert_err("let sin = 1; object o = x;", "cannot define `sin`: it is a built-in function", 1, 5);
+    assert_err("fn f(x) = x; object o = x;", "cannot use as a parameter `x`", 1, 6);
+    assert_err(
+        "object o = x;\ncamera { fov = 30; }\ncamera { fov = 40; }",
+        "a second `camera` block",
+        3,
+        1,
+    );
+    assert_err("object o = x;\ncamera { fov = 30; fov = 40; }", "`fov` is set twice in camera", 2, 20);
+    assert_err(
+        "object o = x;\nbounds = (0,0,0)..(1,1,1);\nbounds = (0,0,0)..(1,1,1);",
+        "`bounds` is set twice",
+        3,
+        1,
+    );
+}
+
+#[test]
+fn missing_object() {
+    let e = assert_err("", "the scene has no object", 1, 1);
+    assert!(e.help.unwrap().contains("object ball"));
+    assert_err("let a = 1;\ncamera { fov = 30; }\n", "the scene has no object", 3, 1);
+}
+
+#[test]
+fn bad_number_literals() {
+    assert_err("object o = 1.2.3 + x;", "bad number literal `1.2.3`", 1, 12);
+    assert_err("object o = x + 1e;", "bad number literal `1e`", 1, 16);
+    let e = assert_err("object o = 2x;", "bad number literal `2x`", 1, 12);
+    assert!(e.help.unwrap().contains("2*x"));
+    assert_err("object o = x + 1e999;", "bad number literal `1e999`: out of range", 1, 16);
+}
+
+#[test]
+fn non_integer_exponent() {
+    let e = assert_err("object o = x^0.5;", "the exponent of `^` must be an integer, but it is 0.5", 1, 14);
+    assert!(e.help.unwrap().contains("pow(a, b)"));
+    assert_err("object o = x^y;", "the exponent of `^` must be a constant integer", 1, 14);
+    assert_err("object o = x^(1/3);", "must be an integer", 1, 14);
+}
+
+#[test]
+fn not_a_shape() {
+    assert_err("object o = 3 + 4;", "this is not a shape", 1, 12);
+    assert_err("let r = 2;\nobject o =\n  sin(r) * 2;", "this is not a shape", 3, 3);
+}
+
+#[test]
+fn invalid_values() {
+    assert_err("object o = scale(sphere(1), -2);", "the scale factor must be positive", 1, 29);
+    assert_err("object o = scale(sphere(1), x);", "the scale factor must be a constant", 1, 29);
+    assert_err("object o = blend(x, y, 0);", "the blend radius must be positive", 1, 24);
+    assert_err("object o = x + sqrt(-1);", "not a number (NaN)", 1, 16);
+    assert_err("object o = x;\ncamera { eye = (0, 0, 0); }", "`eye` and `target` are the same point", 2, 1);
+    assert_err("object o = x;\ncamera { eye = (0, 5, 0); }", "`up` is zero or parallel", 2, 1);
+    assert_err("object o = x;\ncamera { up = (0, 0, 0); }", "`up` is zero or parallel", 2, 15);
+    assert_err("object o = x;\ncamera { fov = 180; }", "`fov` must be between 0 and 180", 2, 16);
+    assert_err("object o = x;\ncamera { ortho = 0; }", "`ortho` (the view width) must be positive", 2, 18);
+    assert_err("object o = x;\ncamera { fov = 30; ortho = 2; }", "either `fov` or `ortho`", 2, 20);
+    assert_err("object o = x;\ncamera { eye = (x, 0, 1); }", "`eye` must be a constant", 2, 17);
+    assert_err("object o = x;\ncamera { eye = (1, 2); }", "`eye` must have 3 components", 2, 16);
+    let e = assert_err("object o = x;\ncamera { ey = (1, 2, 3); }", "unknown property `ey` in camera", 2, 10);
+    assert_eq!(e.help.as_deref(), Some("did you mean `eye`?"));
+    assert_err("object o = x;\nrender { size = (0, 10); }", "image sizes must be whole numbers", 2, 18);
+    assert_err("object o = x;\nrender { size = (20000, 10); }", "image sizes must be whole numbers", 2, 18);
+    assert_err("object o = x;\nrender { size = (10.5, 10); }", "image sizes must be whole numbers", 2, 18);
+    assert_err("object o = x;\nbounds = (0, 0, 0) .. (1, 0, 1);", "empty bounds: the minimum y", 2, 10);
+    assert_err("object o = x { color = (1, 0, -1); }", "`color` components must not be negative", 1, 24);
+    assert_err("object o = x { color = (1, 0, 1e308*10); }", "must be finite", 1, 31);
+    assert_err("object o = x;\nlight { color = (1, 1, 1); }", "a light needs a `position` or a `direction`", 2, 1);
+    assert_err("object o = x;\nlight { direction = (0, 0, 0); }", "must not be zero", 2, 21);
+    assert_err("object o = x;\nlight { position = (0, 0, 0); shadows = 1; }", "`shadows` must be `true` or `false`", 2, 41);
+    assert_err("object o = sphere;", "`sphere` is a function, not a value", 1, 12);
+    assert_err("let r = 1; object o = r(x);", "`r` is a value, not a function", 1, 23);
+}
+
+// ------------------------------------------------------------- limits
+
+fn nested(open: &str, inner: &str, close: &str, n: usize) -> String {
+    let mut s = String::with_capacity(n * (open.len() + close.len()) + 32);
+    s.push_str("object o = ");
+    for _ in 0..n {
+        s.push_str(open);
+    }
+    s.push_str(inner);
+    for _ in 0..n {
+        s.push_str(close);
+    }
+    s.push(';');
+    s
+}
+
+#[test]
+fn deep_nesting_is_an_error_not_a_crash() {
+    let n = 100_000;
+    for (open, close) in [("sin(", ")"), ("-", ""), ("(1+", ")"), ("abs(1*", ")")] {
+        let src = nested(open, "x", close, n);
+        let e = err(&src);
+        assert!(e.message.contains("nested too deeply"), "{e}");
+        assert_eq!(e.line, 1);
+    }
+    let e = err(&nested("sin(", "x", ")", n));
+    // the innermost 511 calls are accepted (x is level 1); the 512th fails
+    assert_eq!(e.col, 12 + 4 * (n - 512));
+    // powers nest to the right
+    let mut src = String::from("object o = x");
+    for _ in 0..n {
+        src.push_str("^x");
+    }
+    src.push(';');
+    assert!(err(&src).message.contains("nested too deeply"));
+}
+
+#[test]
+fn deep_parentheses_are_fine() {
+    // parentheses add no tree node, so any number of them is accepted
+    let s = scene(&nested("(", "x", ")", 100_000));
+    assert_eq!(eval(&s.objects[0].function, P), P[0]);
+}
+
+#[test]
+fn moderate_nesting_is_accepted() {
+    let s = scene(&nested("sin(", "x", ")", 400));
+    let mut v = P[0];
+    for _ in 0..400 {
+        v = v.sin();
+    }
+    assert_close(eval(&s.objects[0].function, P), v);
+}
+
+#[test]
+fn deep_call_chains_are_limited() {
+    let mut src = String::from("fn f0(a) = a + x;\n");
+    for i in 1..1000 {
+        src.push_str(&format!("fn f{i}(a) = f{}(a) + 1;\n", i - 1));
+    }
+    src.push_str("object o = f999(1);");
+    let e = err(&src);
+    assert!(e.message.contains("definitions nested too deeply"), "{e}");
+}
+
+#[test]
+fn exponential_inlining_is_cut_off() {
+    // each level uses the one below twice with distinct call sites: the
+    // inlined size doubles per level; lowering must stop, not hang
+    let mut src = String::from("fn d0(a) = a + x;\n");
+    for i in 1..60 {
+        src.push_str(&format!("fn d{i}(a) = d{p}(a) * d{p}(a + 1);\n", p = i - 1));
+    }
+    src.push_str("object o = d59(y);");
+    let start = std::time::Instant::now();
+    let e = err(&src);
+    assert!(e.message.contains("too large to lower"), "{e}");
+    assert!(start.elapsed().as_secs() < 60);
+}
+
+#[test]
+fn a_million_terms() {
+    let n = 1_000_000;
+    let mut src = String::with_capacity(n * 4 + 32);
+    src.push_str("object o = x");
+    for _ in 1..n {
+        src.push_str(" + x");
+    }
+    src.push(';');
+    let start = std::time::Instant::now();
+    let s = scene(&src);
+    assert_eq!(s.objects[0].function.len(), n);
+    assert_close(eval(&s.objects[0].function, [1.0, 0.0, 0.0]), n as f64);
+    let mut src = String::with_capacity(n * 8 + 32);
+    src.push_str("object o = y");
+    for i in 1..n {
+        src.push_str(if i % 2 == 0 { " * x" } else { " / x" });
+    }
+    src.push(';');
+    let s = scene(&src);
+    assert_close(eval(&s.objects[0].function, [1.0, 2.0, 0.0]), 2.0);
+    assert!(start.elapsed().as_secs() < 30, "took {:?}", start.elapsed());
+}
+
+#[test]
+fn a_hundred_thousand_terms() {
+    let n = 100_000;
+    let mut src = String::from("object o = x");
+    for _ in 1..n {
+        src.push_str(" - y");
+    }
+    src.push(';');
+    let s = scene(&src);
+    assert_close(eval(&s.objects[0].function, [1.0, 1.0, 0.0]), 1.0 - (n - 1) as f64);
+    let mut src = String::from("object o = min(x");
+    for _ in 1..n {
+        src.push_str(", y");
+    }
+    src.push_str(");");
+    assert_eq!(scene(&src).objects.len(), 1);
+}
+
+// ------------------------------------------------------------ files
+
+#[test]
+fn missing_file() {
+    let e = load_scene(Path::new("/nonexistent/dir/scene.ib")).unwrap_err();
+    assert!(e.message.starts_with("cannot read `/nonexistent/dir/scene.ib`"), "{e}");
+    assert_eq!((e.line, e.col), (0, 0));
+    assert!(e.rendered.starts_with("/nonexistent/dir/scene.ib: error: cannot read"));
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}

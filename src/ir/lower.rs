@@ -28,7 +28,7 @@ use std::rc::Rc;
 pub const MAX_CALL_DEPTH: usize = 128;
 
 /// Lowering steps (expression nodes visited) allowed per object.
-pub const MAX_STEPS: u64 = 50_000_000;
+pub const MAX_STEPS: u64 = 5_000_000;
 
 /// The functions built into the language, with their argument counts
 /// (`None`: two or more).
