@@ -110,7 +110,12 @@ fn integer_powers() {
     let f = formula("x^4");
     assert!(f.ops.iter().any(|o| matches!(o, Op::Powi(_, 4))));
     // exponent may be a constant expression
-    assert!(formula("x^(1+1)").ops.iter().any(|o| matches!(o, Op::Powi(_, 2))));
+    assert!(
+        formula("x^(1+1)")
+            .ops
+            .iter()
+            .any(|o| matches!(o, Op::Powi(_, 2)))
+    );
 }
 
 #[test]
@@ -144,7 +149,10 @@ fn let_and_fn_definitions() {
          object o = ring(two_r, r) + 0*z;",
     );
     let (x, y) = (P[0], P[1]);
-    assert_close(eval(&s.objects[0].function, P), (x * x + y * y).sqrt() - 1.0 + 0.5);
+    assert_close(
+        eval(&s.objects[0].function, P),
+        (x * x + y * y).sqrt() - 1.0 + 0.5,
+    );
     // definitions may come after their use
     let s = scene("object o = f(1); fn f(r) = x - r;");
     assert_close(eval(&s.objects[0].function, P), P[0] - 1.0);
@@ -177,7 +185,10 @@ fn csg_operators() {
         assert_close(at(&format!("intersect({a}, {b})"), p), fa.max(fb));
         assert_close(at(&format!("difference({a}, {b})"), p), fa.max(-fb));
         assert_close(at(&format!("complement({a})"), p), -fa);
-        assert_close(at(&format!("union({a}, {b}, x - 5)"), p), fa.min(fb).min(p[0] - 5.0));
+        assert_close(
+            at(&format!("union({a}, {b}, x - 5)"), p),
+            fa.min(fb).min(p[0] - 5.0),
+        );
         let k: f64 = 0.3;
         let h = (k - (fa - fb).abs()).max(0.0) / k;
         let expect = fa.min(fb) - h * h * k / 4.0;
@@ -266,7 +277,10 @@ fn scene_items() {
     assert_eq!(s.objects[1].color, ibeam::lang::scene::DEFAULT_OBJECT_COLOR);
     assert_close(eval(&s.objects[1].function, [0.0, 0.0, 0.0]), 1.0);
     assert_eq!(s.camera.eye, [0.0, 1.0, 5.0]);
-    assert_eq!(s.camera.projection, Projection::Perspective { fov_deg: 35.0 });
+    assert_eq!(
+        s.camera.projection,
+        Projection::Perspective { fov_deg: 35.0 }
+    );
     assert_eq!(s.lights.len(), 2);
     assert_eq!(s.lights[0].kind, LightKind::Point([1.0, 2.0, 3.0]));
     assert_eq!(s.lights[0].color, [0.5; 3]);
@@ -307,7 +321,12 @@ fn comments_and_whitespace() {
 fn unexpected_token() {
     let e = assert_err("object o = sphere(1) +;", "unexpected `;`", 1, 23);
     assert!(e.help.unwrap().contains("a number"));
-    assert_err("object o = sphere(1);\ncamera { eye = (1, 2, 3) }", "unexpected `}`", 2, 26);
+    assert_err(
+        "object o = sphere(1);\ncamera { eye = (1, 2, 3) }",
+        "unexpected `}`",
+        2,
+        26,
+    );
     assert_err("object o = x y;", "unexpected name `y`", 1, 14);
     assert_err("object o = x @ y;", "unexpected character `@`", 1, 14);
 }
@@ -324,11 +343,26 @@ fn unknown_names_suggest_a_fix() {
     let e = assert_err("object o = sphre(1);", "unknown function `sphre`", 1, 12);
     assert_eq!(e.help.as_deref(), Some("did you mean `sphere`?"));
     assert!(e.rendered.contains("help: did you mean `sphere`?"));
-    let e = assert_err("let radius = 1;\nobject o = sphere(raduis);", "unknown variable `raduis`", 2, 19);
+    let e = assert_err(
+        "let radius = 1;\nobject o = sphere(raduis);",
+        "unknown variable `raduis`",
+        2,
+        19,
+    );
     assert_eq!(e.help.as_deref(), Some("did you mean `radius`?"));
     let e = assert_err("object o = w + 1;", "unknown variable `w`", 1, 12);
-    assert!(e.help.is_none() || e.help.as_deref().is_some_and(|h| h.contains("did you mean")));
-    let e = assert_err("fn f(size) = x - sise; object o = f(1);", "unknown variable `sise`", 1, 18);
+    assert!(
+        e.help.is_none()
+            || e.help
+                .as_deref()
+                .is_some_and(|h| h.contains("did you mean"))
+    );
+    let e = assert_err(
+        "fn f(size) = x - sise; object o = f(1);",
+        "unknown variable `sise`",
+        1,
+        18,
+    );
     assert_eq!(e.help.as_deref(), Some("did you mean `size`?"));
     let e = assert_err("object o = qqqqqq(x);", "unknown function `qqqqqq`", 1, 12);
     assert_eq!(e.help, None);
@@ -336,17 +370,47 @@ fn unknown_names_suggest_a_fix() {
 
 #[test]
 fn wrong_arity() {
-    let e = assert_err("object o = sphere(1, 2);", "`sphere` takes 1 argument, but 2 were given", 1, 12);
+    let e = assert_err(
+        "object o = sphere(1, 2);",
+        "`sphere` takes 1 argument, but 2 were given",
+        1,
+        12,
+    );
     assert_eq!(e.help.as_deref(), Some("call it as `sphere(r)`"));
-    assert_err("object o = min(x);", "`min` takes at least 2 arguments, but 1 was given", 1, 12);
-    assert_err("object o = x +\n  sqrt(x, y);", "`sqrt` takes 1 argument, but 2 were given", 2, 3);
-    assert_err("fn f(a, b) = a + b;\nobject o = f(x);", "`f` takes 2 arguments, but 1 was given", 2, 12);
-    assert_err("object o = blend(x, y);", "`blend` takes 3 arguments", 1, 12);
+    assert_err(
+        "object o = min(x);",
+        "`min` takes at least 2 arguments, but 1 was given",
+        1,
+        12,
+    );
+    assert_err(
+        "object o = x +\n  sqrt(x, y);",
+        "`sqrt` takes 1 argument, but 2 were given",
+        2,
+        3,
+    );
+    assert_err(
+        "fn f(a, b) = a + b;\nobject o = f(x);",
+        "`f` takes 2 arguments, but 1 was given",
+        2,
+        12,
+    );
+    assert_err(
+        "object o = blend(x, y);",
+        "`blend` takes 3 arguments",
+        1,
+        12,
+    );
 }
 
 #[test]
 fn recursion() {
-    let e = assert_err("fn f(a) = f(a) + x;\nobject o = f(1);", "recursive use of `f` (f -> f)", 1, 11);
+    let e = assert_err(
+        "fn f(a) = f(a) + x;\nobject o = f(1);",
+        "recursive use of `f` (f -> f)",
+        1,
+        11,
+    );
     assert!(e.help.unwrap().contains("inlined"));
     assert_err(
         "fn f(a) = g(a);\nfn g(b) = f(b) + x;\nobject o = f(x);",
@@ -354,25 +418,65 @@ fn recursion() {
         2,
         11,
     );
-    assert_err("let a = b + x;\nlet b = a;\nobject o = a;", "mutually recursive use of `a`", 2, 9);
+    assert_err(
+        "let a = b + x;\nlet b = a;\nobject o = a;",
+        "mutually recursive use of `a`",
+        2,
+        9,
+    );
 }
 
 #[test]
 fn duplicate_definitions() {
-    let e = assert_err("let a = 1;\nlet a = 2;\nobject o = x;", "`a` is defined twice", 2, 5);
+    let e = assert_err(
+        "let a = 1;\nlet a = 2;\nobject o = x;",
+        "`a` is defined twice",
+        2,
+        5,
+    );
     assert!(e.rendered.contains("first defined here"));
-    assert_err("fn sphere(r) = x;\nobject o = x;", "`sphere` is defined twice", 1, 4);
-    assert_err("object o = x;\nobject o = y;", "object `o` is defined twice", 2, 8);
-    assert_err("fn f(a, a) = a; object o = x;", "parameter `a` is defined twice", 1, 9);
-    assert_err("let sin = 1; object o = x;", "cannot define `sin`: it is a built-in function", 1, 5);
-    assert_err("fn f(x) = x; object o = x;", "cannot use as a parameter `x`", 1, 6);
+    assert_err(
+        "fn sphere(r) = x;\nobject o = x;",
+        "`sphere` is defined twice",
+        1,
+        4,
+    );
+    assert_err(
+        "object o = x;\nobject o = y;",
+        "object `o` is defined twice",
+        2,
+        8,
+    );
+    assert_err(
+        "fn f(a, a) = a; object o = x;",
+        "parameter `a` is defined twice",
+        1,
+        9,
+    );
+    assert_err(
+        "let sin = 1; object o = x;",
+        "cannot define `sin`: it is a built-in function",
+        1,
+        5,
+    );
+    assert_err(
+        "fn f(x) = x; object o = x;",
+        "cannot use as a parameter `x`",
+        1,
+        6,
+    );
     assert_err(
         "object o = x;\ncamera { fov = 30; }\ncamera { fov = 40; }",
         "a second `camera` block",
         3,
         1,
     );
-    assert_err("object o = x;\ncamera { fov = 30; fov = 40; }", "`fov` is set twice in camera", 2, 20);
+    assert_err(
+        "object o = x;\ncamera { fov = 30; fov = 40; }",
+        "`fov` is set twice in camera",
+        2,
+        20,
+    );
     assert_err(
         "object o = x;\nbounds = (0,0,0)..(1,1,1);\nbounds = (0,0,0)..(1,1,1);",
         "`bounds` is set twice",
@@ -385,7 +489,12 @@ fn duplicate_definitions() {
 fn missing_object() {
     let e = assert_err("", "the scene has no object", 1, 1);
     assert!(e.help.unwrap().contains("object ball"));
-    assert_err("let a = 1;\ncamera { fov = 30; }\n", "the scene has no object", 3, 1);
+    assert_err(
+        "let a = 1;\ncamera { fov = 30; }\n",
+        "the scene has no object",
+        3,
+        1,
+    );
 }
 
 #[test]
@@ -394,50 +503,185 @@ fn bad_number_literals() {
     assert_err("object o = x + 1e;", "bad number literal `1e`", 1, 16);
     let e = assert_err("object o = 2x;", "bad number literal `2x`", 1, 12);
     assert!(e.help.unwrap().contains("2*x"));
-    assert_err("object o = x + 1e999;", "bad number literal `1e999`: out of range", 1, 16);
+    assert_err(
+        "object o = x + 1e999;",
+        "bad number literal `1e999`: out of range",
+        1,
+        16,
+    );
 }
 
 #[test]
 fn non_integer_exponent() {
-    let e = assert_err("object o = x^0.5;", "the exponent of `^` must be an integer, but it is 0.5", 1, 14);
+    let e = assert_err(
+        "object o = x^0.5;",
+        "the exponent of `^` must be an integer, but it is 0.5",
+        1,
+        14,
+    );
     assert!(e.help.unwrap().contains("pow(a, b)"));
-    assert_err("object o = x^y;", "the exponent of `^` must be a constant integer", 1, 14);
+    assert_err(
+        "object o = x^y;",
+        "the exponent of `^` must be a constant integer",
+        1,
+        14,
+    );
     assert_err("object o = x^(1/3);", "must be an integer", 1, 14);
 }
 
 #[test]
 fn not_a_shape() {
     assert_err("object o = 3 + 4;", "this is not a shape", 1, 12);
-    assert_err("let r = 2;\nobject o =\n  sin(r) * 2;", "this is not a shape", 3, 3);
+    assert_err(
+        "let r = 2;\nobject o =\n  sin(r) * 2;",
+        "this is not a shape",
+        3,
+        3,
+    );
 }
 
 #[test]
 fn invalid_values() {
-    assert_err("object o = scale(sphere(1), -2);", "the scale factor must be positive", 1, 29);
-    assert_err("object o = scale(sphere(1), x);", "the scale factor must be a constant", 1, 29);
-    assert_err("object o = blend(x, y, 0);", "the blend radius must be positive", 1, 24);
+    assert_err(
+        "object o = scale(sphere(1), -2);",
+        "the scale factor must be positive",
+        1,
+        29,
+    );
+    assert_err(
+        "object o = scale(sphere(1), x);",
+        "the scale factor must be a constant",
+        1,
+        29,
+    );
+    assert_err(
+        "object o = blend(x, y, 0);",
+        "the blend radius must be positive",
+        1,
+        24,
+    );
     assert_err("object o = x + sqrt(-1);", "not a number (NaN)", 1, 16);
-    assert_err("object o = x;\ncamera { eye = (0, 0, 0); }", "`eye` and `target` are the same point", 2, 1);
-    assert_err("object o = x;\ncamera { eye = (0, 5, 0); }", "`up` is zero or parallel", 2, 1);
-    assert_err("object o = x;\ncamera { up = (0, 0, 0); }", "`up` is zero or parallel", 2, 15);
-    assert_err("object o = x;\ncamera { fov = 180; }", "`fov` must be between 0 and 180", 2, 16);
-    assert_err("object o = x;\ncamera { ortho = 0; }", "`ortho` (the view width) must be positive", 2, 18);
-    assert_err("object o = x;\ncamera { fov = 30; ortho = 2; }", "either `fov` or `ortho`", 2, 20);
-    assert_err("object o = x;\ncamera { eye = (x, 0, 1); }", "`eye` must be a constant", 2, 17);
-    assert_err("object o = x;\ncamera { eye = (1, 2); }", "`eye` must have 3 components", 2, 16);
-    let e = assert_err("object o = x;\ncamera { ey = (1, 2, 3); }", "unknown property `ey` in camera", 2, 10);
+    assert_err(
+        "object o = x;\ncamera { eye = (0, 0, 0); }",
+        "`eye` and `target` are the same point",
+        2,
+        1,
+    );
+    assert_err(
+        "object o = x;\ncamera { eye = (0, 5, 0); }",
+        "`up` is zero or parallel",
+        2,
+        1,
+    );
+    assert_err(
+        "object o = x;\ncamera { up = (0, 0, 0); }",
+        "`up` is zero or parallel",
+        2,
+        15,
+    );
+    assert_err(
+        "object o = x;\ncamera { fov = 180; }",
+        "`fov` must be between 0 and 180",
+        2,
+        16,
+    );
+    assert_err(
+        "object o = x;\ncamera { ortho = 0; }",
+        "`ortho` (the view width) must be positive",
+        2,
+        18,
+    );
+    assert_err(
+        "object o = x;\ncamera { fov = 30; ortho = 2; }",
+        "either `fov` or `ortho`",
+        2,
+        20,
+    );
+    assert_err(
+        "object o = x;\ncamera { eye = (x, 0, 1); }",
+        "`eye` must be a constant",
+        2,
+        17,
+    );
+    assert_err(
+        "object o = x;\ncamera { eye = (1, 2); }",
+        "`eye` must have 3 components",
+        2,
+        16,
+    );
+    let e = assert_err(
+        "object o = x;\ncamera { ey = (1, 2, 3); }",
+        "unknown property `ey` in camera",
+        2,
+        10,
+    );
     assert_eq!(e.help.as_deref(), Some("did you mean `eye`?"));
-    assert_err("object o = x;\nrender { size = (0, 10); }", "image sizes must be whole numbers", 2, 18);
-    assert_err("object o = x;\nrender { size = (20000, 10); }", "image sizes must be whole numbers", 2, 18);
-    assert_err("object o = x;\nrender { size = (10.5, 10); }", "image sizes must be whole numbers", 2, 18);
-    assert_err("object o = x;\nbounds = (0, 0, 0) .. (1, 0, 1);", "empty bounds: the minimum y", 2, 10);
-    assert_err("object o = x { color = (1, 0, -1); }", "`color` components must not be negative", 1, 24);
-    assert_err("object o = x { color = (1, 0, 1e308*10); }", "must be finite", 1, 31);
-    assert_err("object o = x;\nlight { color = (1, 1, 1); }", "a light needs a `position` or a `direction`", 2, 1);
-    assert_err("object o = x;\nlight { direction = (0, 0, 0); }", "must not be zero", 2, 21);
-    assert_err("object o = x;\nlight { position = (0, 0, 0); shadows = 1; }", "`shadows` must be `true` or `false`", 2, 41);
-    assert_err("object o = sphere;", "`sphere` is a function, not a value", 1, 12);
-    assert_err("let r = 1; object o = r(x);", "`r` is a value, not a function", 1, 23);
+    assert_err(
+        "object o = x;\nrender { size = (0, 10); }",
+        "image sizes must be whole numbers",
+        2,
+        18,
+    );
+    assert_err(
+        "object o = x;\nrender { size = (20000, 10); }",
+        "image sizes must be whole numbers",
+        2,
+        18,
+    );
+    assert_err(
+        "object o = x;\nrender { size = (10.5, 10); }",
+        "image sizes must be whole numbers",
+        2,
+        18,
+    );
+    assert_err(
+        "object o = x;\nbounds = (0, 0, 0) .. (1, 0, 1);",
+        "empty bounds: the minimum y",
+        2,
+        10,
+    );
+    assert_err(
+        "object o = x { color = (1, 0, -1); }",
+        "`color` components must not be negative",
+        1,
+        24,
+    );
+    assert_err(
+        "object o = x { color = (1, 0, 1e308*10); }",
+        "must be finite",
+        1,
+        31,
+    );
+    assert_err(
+        "object o = x;\nlight { color = (1, 1, 1); }",
+        "a light needs a `position` or a `direction`",
+        2,
+        1,
+    );
+    assert_err(
+        "object o = x;\nlight { direction = (0, 0, 0); }",
+        "must not be zero",
+        2,
+        21,
+    );
+    assert_err(
+        "object o = x;\nlight { position = (0, 0, 0); shadows = 1; }",
+        "`shadows` must be `true` or `false`",
+        2,
+        41,
+    );
+    assert_err(
+        "object o = sphere;",
+        "`sphere` is a function, not a value",
+        1,
+        12,
+    );
+    assert_err(
+        "let r = 1; object o = r(x);",
+        "`r` is a value, not a function",
+        1,
+        23,
+    );
 }
 
 // ------------------------------------------------------------- limits
@@ -553,7 +797,10 @@ fn a_hundred_thousand_terms() {
     }
     src.push(';');
     let s = scene(&src);
-    assert_close(eval(&s.objects[0].function, [1.0, 1.0, 0.0]), 1.0 - (n - 1) as f64);
+    assert_close(
+        eval(&s.objects[0].function, [1.0, 1.0, 0.0]),
+        1.0 - (n - 1) as f64,
+    );
     let mut src = String::from("object o = min(x");
     for _ in 1..n {
         src.push_str(", y");
@@ -567,11 +814,292 @@ fn a_hundred_thousand_terms() {
 #[test]
 fn missing_file() {
     let e = load_scene(Path::new("/nonexistent/dir/scene.ib")).unwrap_err();
-    assert!(e.message.starts_with("cannot read `/nonexistent/dir/scene.ib`"), "{e}");
+    assert!(
+        e.message
+            .starts_with("cannot read `/nonexistent/dir/scene.ib`"),
+        "{e}"
+    );
     assert_eq!((e.line, e.col), (0, 0));
-    assert!(e.rendered.starts_with("/nonexistent/dir/scene.ib: error: cannot read"));
+    assert!(
+        e.rendered
+            .starts_with("/nonexistent/dir/scene.ib: error: cannot read")
+    );
 }
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+// ------------------------------------------------------------ examples
+
+/// Every surface of shared/surfaces.md has a scene, plus the CSG scene.
+const EXAMPLES: &[&str] = &[
+    "orthocircle",
+    "orthocircle_thin",
+    "tangle_cube",
+    "torus",
+    "sphere",
+    "steiner",
+    "barth_sextic",
+    "mitchell",
+    "blobby",
+    "metaballs",
+    "drop",
+    "double_sphere",
+    "heart",
+    "csg",
+];
+
+fn example_files() -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(root().join("examples"))
+        .expect("examples/ exists")
+        .map(|e| e.expect("readable entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "ib"))
+        .collect();
+    files.sort();
+    files
+}
+
+#[test]
+fn every_example_loads() {
+    let files = example_files();
+    for name in EXAMPLES {
+        assert!(
+            files
+                .iter()
+                .any(|f| f.file_stem().is_some_and(|s| s == *name)),
+            "examples/{name}.ib is missing"
+        );
+    }
+    for f in &files {
+        let s = load_scene(f).unwrap_or_else(|e| panic!("{e}"));
+        assert!(!s.objects.is_empty());
+        assert!(
+            s.lights.iter().any(|l| l.shadows),
+            "{} has no shadowed light",
+            f.display()
+        );
+    }
+}
+
+/// The bounds frame each surface: the camera looks from outside them at a
+/// point inside, the function is negative somewhere inside, and (for bounded surfaces)
+/// never negative on the boundary.
+#[test]
+fn example_bounds_enclose_the_surface() {
+    for f in example_files() {
+        let stem = f.file_stem().unwrap().to_string_lossy().into_owned();
+        let s = load_scene(&f).unwrap_or_else(|e| panic!("{e}"));
+        let (lo, hi) = (s.bounds.min, s.bounds.max);
+        for i in 0..3 {
+            assert!(
+                lo[i] <= s.camera.target[i] && s.camera.target[i] <= hi[i],
+                "{stem}: target"
+            );
+        }
+        let eye = s.camera.eye;
+        assert!(
+            !(0..3).all(|i| lo[i] <= eye[i] && eye[i] <= hi[i]),
+            "{stem}: eye inside the bounds"
+        );
+        let n = 24;
+        let lerp = |i: usize, t: usize| lo[i] + (hi[i] - lo[i]) * t as f64 / n as f64;
+        for o in &s.objects {
+            let mut min_inside = f64::INFINITY;
+            for a in 0..=n {
+                for b in 0..=n {
+                    for c in 0..=n {
+                        let v = eval(&o.function, [lerp(0, a), lerp(1, b), lerp(2, c)]);
+                        min_inside = min_inside.min(v);
+                    }
+                }
+            }
+            if stem == "double_sphere" {
+                assert!(
+                    (0.0..0.05).contains(&min_inside),
+                    "{stem}: {min_inside}"
+                );
+            } else {
+                assert!(
+                    min_inside < 0.0,
+                    "{stem}/{}: nothing inside the bounds",
+                    o.name
+                );
+            }
+            if stem == "csg" {
+                continue; // the ground plane is cut by the bounds on purpose
+            }
+            for axis in 0..3 {
+                for side in [lo[axis], hi[axis]] {
+                    for a in 0..=n {
+                        for b in 0..=n {
+                            let mut p = [0.0; 3];
+                            p[axis] = side;
+                            p[(axis + 1) % 3] = lerp((axis + 1) % 3, a);
+                            p[(axis + 2) % 3] = lerp((axis + 2) % 3, b);
+                            let v = eval(&o.function, p);
+                            assert!(
+                                v >= 0.0,
+                                "{stem}: surface crosses the bounds at {p:?} ({v})"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn example_ir_snapshots() {
+    for f in example_files() {
+        let stem = f.file_stem().unwrap().to_string_lossy().into_owned();
+        let s = load_scene(&f).unwrap_or_else(|e| panic!("{e}"));
+        let mut text = String::new();
+        for o in &s.objects {
+            text.push_str(&format!("# object {}\n", o.name));
+            text.push_str(&ibeam::ir::print::print(&o.function));
+        }
+        insta::assert_snapshot!(format!("ir_{stem}"), text);
+    }
+}
+
+/// One snapshot of the rendered diagnostic per file in tests/diagnostics.
+#[test]
+fn diagnostic_snapshots() {
+    let dir = root().join("tests/diagnostics");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .expect("tests/diagnostics exists")
+        .map(|e| e.expect("readable entry").path())
+        .collect();
+    files.sort();
+    assert!(files.len() >= 10);
+    for f in files {
+        let name = format!(
+            "tests/diagnostics/{}",
+            f.file_name().unwrap().to_string_lossy()
+        );
+        let text = std::fs::read_to_string(&f).expect("readable");
+        let e = match load_scene_source(&name, &text) {
+            Ok(_) => panic!("{name} loads without error"),
+            Err(e) => e,
+        };
+        assert!(
+            e.rendered
+                .starts_with(&format!("{name}:{}:{}: error: ", e.line, e.col))
+        );
+        let stem = f.file_name().unwrap().to_string_lossy().replace('.', "_");
+        insta::assert_snapshot!(format!("diag_{stem}"), e.rendered);
+    }
+}
+
+// ------------------------------------------------------------ .vm import
+
+fn vm(text: &str) -> Result<Scene, LoadError> {
+    load_scene_source("model.vm", text)
+}
+
+#[test]
+fn vm_every_op() {
+    let text = "# every op\n\
+        _0 var-x\n_1 var-y\n_2 var-z\n_3 const 0.5\n\
+        _4 neg _0\n_5 abs _4\n_6 recip _2\n_7 sqrt _2\n_8 square _1\n\
+        _9 exp _3\n_a ln _2\n_b sin _0\n_c cos _1\n\
+        _d add _5 _6\n_e sub _d _7\n_f mul _e _8\n_10 div _f _9\n\
+        _11 min _10 _a\n_12 max _11 _b\n_13 atan2 _12 _c\n";
+    let s = vm(text).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.objects.len(), 1);
+    assert_eq!(s.objects[0].name, "model");
+    let [x, y, z] = P;
+    let v = ((((x.abs() + 1.0 / z) - z.sqrt()) * (y * y)) / 0.5f64.exp()).min(z.ln());
+    let expect = v.max(x.sin()).atan2(y.cos());
+    assert_close(eval(&s.objects[0].function, P), expect);
+    // 3D model: perspective default
+    assert!(matches!(
+        s.camera.projection,
+        Projection::Perspective { .. }
+    ));
+}
+
+#[test]
+fn vm_2d_model_gets_a_top_down_orthographic_view() {
+    let s = vm("_0 var-x\n_1 var-y\n_2 square _0\n_3 square _1\n_4 add _2 _3\n_5 const 0.25\n_6 sub _4 _5\n")
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.camera.projection, Projection::Orthographic { width: 2.0 });
+    assert!(s.camera.eye[2] > s.camera.target[2]);
+    assert_eq!(s.bounds.min, [-1.0; 3]);
+    assert_eq!(s.bounds.max, [1.0; 3]);
+    assert_close(eval(&s.objects[0].function, [0.0, 0.0, 0.0]), -0.25);
+}
+
+#[test]
+fn vm_malformed_lines() {
+    let e = vm("_0 var-x\n_1 foo _0\n").unwrap_err();
+    assert_eq!(
+        (e.message.as_str(), e.line, e.col),
+        ("unknown op `foo`", 2, 4)
+    );
+    let e = vm("_0 var-x\n_1 ad _0 _0\n").unwrap_err();
+    assert_eq!(e.help.as_deref(), Some("did you mean `add`?"));
+    let e = vm("_0 var-x\n_1 add _0 _9\n").unwrap_err();
+    assert_eq!(
+        (e.message.as_str(), e.line, e.col),
+        ("`_9` is not defined before this line", 2, 11)
+    );
+    let e = vm("_0 var-x\n_1 add _0\n").unwrap_err();
+    assert_eq!(
+        (e.message.as_str(), e.line, e.col),
+        ("`add` takes 2 arguments, but 1 was given", 2, 4)
+    );
+    let e = vm("_0 var-x\n_1 neg _0 _0\n").unwrap_err();
+    assert_eq!(
+        (e.message.as_str(), e.line, e.col),
+        ("`neg` takes 1 argument, but 2 were given", 2, 11)
+    );
+    let e = vm("_0 const 1.2.3\n").unwrap_err();
+    assert_eq!(
+        (e.message.as_str(), e.line, e.col),
+        ("bad number literal `1.2.3`", 1, 10)
+    );
+    let e = vm("_0 var-x\n  _0 var-y\n").unwrap_err();
+    assert_eq!(
+        (e.message.as_str(), e.line, e.col),
+        ("`_0` is defined twice", 2, 3)
+    );
+    let e = vm("# nothing\n\n").unwrap_err();
+    assert_eq!(
+        (e.message.as_str(), e.line, e.col),
+        ("the file has no ops", 1, 1)
+    );
+    let e = vm("_0 var-x\n_1\n").unwrap_err();
+    assert_eq!(
+        (e.message.as_str(), e.line, e.col),
+        ("`_1` has no op", 2, 1)
+    );
+    let e = vm("_0 const 2\n").unwrap_err();
+    assert!(e.message.contains("not a shape"));
+    assert!(e.rendered.starts_with("model.vm:"));
+}
+
+#[test]
+fn vm_benchmark_models() {
+    let dir = root().join("../shared/models");
+    if !dir.join("prospero.vm").exists() {
+        eprintln!("skipped: {} is not present", dir.display());
+        return;
+    }
+    let s = load_scene(&dir.join("prospero.vm")).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.objects[0].name, "prospero");
+    assert_eq!(s.objects[0].function.uses_vars(), [true, true, false]);
+    assert!(matches!(
+        s.camera.projection,
+        Projection::Orthographic { .. }
+    ));
+    assert!(s.objects[0].function.len() > 1000);
+    let s = load_scene(&dir.join("colonnade.vm")).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.objects[0].function.uses_vars(), [true, true, true]);
+    assert!(matches!(
+        s.camera.projection,
+        Projection::Perspective { .. }
+    ));
 }

@@ -103,7 +103,11 @@ impl<'a> Program<'a> {
                         name.span.0..name.span.1,
                         format!("`{}` is defined twice", name.name),
                     )
-                    .with_secondary(prev.src, prev.name.span.0..prev.name.span.1, "first defined here")
+                    .with_secondary(
+                        prev.src,
+                        prev.name.span.0..prev.name.span.1,
+                        "first defined here",
+                    )
                     .with_help("rename one of the definitions"));
                 }
                 if let Some(ps) = params {
@@ -115,7 +119,11 @@ impl<'a> Program<'a> {
                                 p.span.0..p.span.1,
                                 format!("parameter `{}` is defined twice", p.name),
                             )
-                            .with_secondary(src, q.span.0..q.span.1, "first defined here"));
+                            .with_secondary(
+                                src,
+                                q.span.0..q.span.1,
+                                "first defined here",
+                            ));
                         }
                     }
                 }
@@ -145,7 +153,9 @@ impl<'a> Program<'a> {
             Val::Const(c) => Err(Diag::new(
                 src,
                 body.span.0..body.span.1,
-                format!("this is not a shape: it does not depend on x, y or z (it is the constant {c})"),
+                format!(
+                    "this is not a shape: it does not depend on x, y or z (it is the constant {c})"
+                ),
             )
             .with_help("a shape is an expression over x, y, z, e.g. `sphere(1)`")),
         }
@@ -313,14 +323,24 @@ impl<'p, 'a> Lowerer<'p, 'a> {
 
     fn folded(&self, c: f64, ctx: &Ctx<'a>, span: (usize, usize)) -> Result<Val, Diag> {
         if c.is_nan() {
-            Err(ctx.diag(span, "this constant expression is not a number (NaN)".into())
+            Err(ctx
+                .diag(
+                    span,
+                    "this constant expression is not a number (NaN)".into(),
+                )
                 .with_help("check for a square root or logarithm of a negative number, or 0/0"))
         } else {
             Ok(Val::Const(c))
         }
     }
 
-    fn unary(&mut self, op: UnaryOp, a: Val, ctx: &Ctx<'a>, span: (usize, usize)) -> Result<Val, Diag> {
+    fn unary(
+        &mut self,
+        op: UnaryOp,
+        a: Val,
+        ctx: &Ctx<'a>,
+        span: (usize, usize),
+    ) -> Result<Val, Diag> {
         match a {
             Val::Const(c) => self.folded(point_unary(op, c), ctx, span),
             Val::Node(n) => Ok(Val::Node(self.b.unary(op, n))),
@@ -443,9 +463,16 @@ impl<'p, 'a> Lowerer<'p, 'a> {
 
     fn enter(&mut self, def: &'p Def<'a>, span: (usize, usize), ctx: &Ctx<'a>) -> Result<(), Diag> {
         if let Some(pos) = self.stack.iter().position(|d| d.id == def.id) {
-            let mut chain: Vec<&str> = self.stack[pos..].iter().map(|d| d.name.name.as_str()).collect();
+            let mut chain: Vec<&str> = self.stack[pos..]
+                .iter()
+                .map(|d| d.name.name.as_str())
+                .collect();
             chain.push(&def.name.name);
-            let what = if chain.len() == 2 { "recursive" } else { "mutually recursive" };
+            let what = if chain.len() == 2 {
+                "recursive"
+            } else {
+                "mutually recursive"
+            };
             return Err(ctx
                 .diag(span, format!("{what} use of `{}` ({})", def.name.name, chain.join(" -> ")))
                 .with_secondary(def.src, def.name.span.0..def.name.span.1, "defined here")
@@ -461,7 +488,13 @@ impl<'p, 'a> Lowerer<'p, 'a> {
         Ok(())
     }
 
-    fn name(&mut self, n: &str, span: (usize, usize), ctx: &Ctx<'a>, env: Env) -> Result<Val, Diag> {
+    fn name(
+        &mut self,
+        n: &str,
+        span: (usize, usize),
+        ctx: &Ctx<'a>,
+        env: Env,
+    ) -> Result<Val, Diag> {
         if let Some(t) = ctx.param(n) {
             if let Some(v) = self.thunk_memo.get(&(t.id, env)) {
                 return Ok(*v);
@@ -505,7 +538,10 @@ impl<'p, 'a> Lowerer<'p, 'a> {
             if let Some(v) = self.def_memo.get(&memo_key) {
                 Ok(*v)
             } else {
-                let body_ctx = Ctx { scope: None, src: def.src };
+                let body_ctx = Ctx {
+                    scope: None,
+                    src: def.src,
+                };
                 let v = self.lower(def.body, &body_ctx, env);
                 if let Ok(v) = v {
                     self.def_memo.insert(memo_key, v);
@@ -514,16 +550,25 @@ impl<'p, 'a> Lowerer<'p, 'a> {
             }
         } else {
             let params = def.params.unwrap_or(&[]);
-            let mut scope = Scope { params: Vec::with_capacity(args.len()) };
+            let mut scope = Scope {
+                params: Vec::with_capacity(args.len()),
+            };
             for (p, a) in params.iter().zip(args) {
                 let id = self.next_thunk;
                 self.next_thunk += 1;
                 scope.params.push((
                     p.name.as_str(),
-                    Rc::new(Thunk { id, expr: a, ctx: ctx.clone() }),
+                    Rc::new(Thunk {
+                        id,
+                        expr: a,
+                        ctx: ctx.clone(),
+                    }),
                 ));
             }
-            let body_ctx = Ctx { scope: Some(Rc::new(scope)), src: def.src };
+            let body_ctx = Ctx {
+                scope: Some(Rc::new(scope)),
+                src: def.src,
+            };
             self.lower(def.body, &body_ctx, env)
         };
         self.stack.pop();
@@ -544,11 +589,17 @@ impl<'p, 'a> Lowerer<'p, 'a> {
         env: Env,
     ) -> Result<Val, Diag> {
         if ctx.param(name).is_some() {
-            return Err(ctx.diag(name_span, format!("`{name}` is a parameter, not a function")));
+            return Err(ctx.diag(
+                name_span,
+                format!("`{name}` is a parameter, not a function"),
+            ));
         }
         if coord(name).is_some() {
             return Err(ctx
-                .diag(name_span, format!("`{name}` is a coordinate, not a function"))
+                .diag(
+                    name_span,
+                    format!("`{name}` is a coordinate, not a function"),
+                )
                 .with_help(format!("write `{name} * (...)` to multiply")));
         }
         if let Some(arity) = builtin_arity(name) {
@@ -600,10 +651,19 @@ impl<'p, 'a> Lowerer<'p, 'a> {
         Err(self.unknown(name, name_span, ctx, true))
     }
 
-    fn constant_arg(&mut self, a: &'a Expr, ctx: &Ctx<'a>, env: Env, what: &str) -> Result<f64, Diag> {
+    fn constant_arg(
+        &mut self,
+        a: &'a Expr,
+        ctx: &Ctx<'a>,
+        env: Env,
+        what: &str,
+    ) -> Result<f64, Diag> {
         match self.lower(a, ctx, env)? {
             Val::Const(c) => Ok(c),
-            Val::Node(_) => Err(ctx.diag(a.span, format!("{what} must be a constant, but this depends on x, y or z"))),
+            Val::Node(_) => Err(ctx.diag(
+                a.span,
+                format!("{what} must be a constant, but this depends on x, y or z"),
+            )),
         }
     }
 
@@ -615,7 +675,9 @@ impl<'p, 'a> Lowerer<'p, 'a> {
         span: (usize, usize),
     ) -> Result<Val, Diag> {
         let mut it = vals.into_iter();
-        let mut acc = it.next().ok_or_else(|| ctx.diag(span, "missing arguments".into()))?;
+        let mut acc = it
+            .next()
+            .ok_or_else(|| ctx.diag(span, "missing arguments".into()))?;
         for v in it {
             acc = self.binary(op, acc, v, ctx, span)?;
         }
@@ -703,7 +765,10 @@ impl<'p, 'a> Lowerer<'p, 'a> {
                 let k = self.constant_arg(&args[2], ctx, env, "the blend radius")?;
                 if !(k > 0.0 && k.is_finite()) {
                     return Err(ctx
-                        .diag(args[2].span, format!("the blend radius must be positive, but it is {k}"))
+                        .diag(
+                            args[2].span,
+                            format!("the blend radius must be positive, but it is {k}"),
+                        )
                         .with_help("use `union(a, b)` for a sharp join"));
                 }
                 let a = self.lower(&args[0], ctx, env)?;
@@ -733,7 +798,10 @@ impl<'p, 'a> Lowerer<'p, 'a> {
                 let k = self.constant_arg(&args[1], ctx, env, "the scale factor")?;
                 if !(k > 0.0 && k.is_finite()) {
                     return Err(ctx
-                        .diag(args[1].span, format!("the scale factor must be positive, but it is {k}"))
+                        .diag(
+                            args[1].span,
+                            format!("the scale factor must be positive, but it is {k}"),
+                        )
                         .with_help("mirroring is not supported; scale by a positive number"));
                 }
                 let mut new_env = env;

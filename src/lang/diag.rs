@@ -41,7 +41,12 @@ impl Diag {
     }
 
     /// Points at a related place.
-    pub fn with_secondary(mut self, src: usize, span: Range<usize>, what: impl Into<String>) -> Diag {
+    pub fn with_secondary(
+        mut self,
+        src: usize,
+        span: Range<usize>,
+        what: impl Into<String>,
+    ) -> Diag {
         self.secondary.push((src, span, what.into()));
         self
     }
@@ -64,7 +69,10 @@ impl Sources {
 
     /// The text of source `src`.
     pub fn text(&self, src: usize) -> &str {
-        self.files.get(src).map(|f| f.source().as_str()).unwrap_or("")
+        self.files
+            .get(src)
+            .map(|f| f.source().as_str())
+            .unwrap_or("")
     }
 
     /// Renders `d` into a [`LoadError`].
@@ -73,7 +81,11 @@ impl Sources {
         let start = d.span.start.min(text.len());
         let end = d.span.end.clamp(start, text.len());
         let (line, col) = line_col(text, start);
-        let name = self.names.get(d.src).map(String::as_str).unwrap_or("<input>");
+        let name = self
+            .names
+            .get(d.src)
+            .map(String::as_str)
+            .unwrap_or("<input>");
         let mut rendered = format!("{name}:{line}:{col}: error: {}\n", d.message);
         let mut labels = vec![Label::primary(d.src, start..end)];
         for (src, span, what) in &d.secondary {

@@ -111,12 +111,12 @@ impl<'a> Iterator for Lexer<'a> {
     fn next(&mut self) -> Option<Self::Item> {
         let (tok, span) = self.inner.next()?;
         Some(match tok {
-            Ok(Tok::BadNum(text)) => Err(Diag::new(
-                self.src,
-                span,
-                format!("bad number literal `{text}`"),
-            )
-            .with_help(bad_number_help(text))),
+            Ok(Tok::BadNum(text)) => {
+                Err(
+                    Diag::new(self.src, span, format!("bad number literal `{text}`"))
+                        .with_help(bad_number_help(text)),
+                )
+            }
             Ok(tok) => Ok((span.start, tok, span.end)),
             Err(()) => {
                 let text = self.inner.slice();

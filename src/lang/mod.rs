@@ -120,7 +120,10 @@ fn on_big_stack<T: Send>(f: impl FnOnce() -> Result<T, LoadError> + Send) -> Res
             .stack_size(LOADER_STACK_BYTES)
             .spawn_scoped(s, f)
             .map_err(|e| {
-                diag::error_without_position("<loader>", format!("cannot start the loader thread: {e}"))
+                diag::error_without_position(
+                    "<loader>",
+                    format!("cannot start the loader thread: {e}"),
+                )
             })?;
         handle.join().unwrap_or_else(|_| {
             Err(diag::error_without_position(

@@ -54,7 +54,12 @@ pub fn sum<'a>(src: usize, a: Expr, op: AddOp, b: Expr, span: Span) -> PResult<'
         }
         _ => {
             let depth = a.depth.max(b.depth) + 1;
-            node(src, ExprKind::Sum(vec![(AddOp::Add, a), (op, b)]), span, depth)
+            node(
+                src,
+                ExprKind::Sum(vec![(AddOp::Add, a), (op, b)]),
+                span,
+                depth,
+            )
         }
     }
 }

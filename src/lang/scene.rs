@@ -6,9 +6,7 @@ use super::ast::{Expr, Ident, Item, Prop, PropValue, Span};
 use super::diag::Diag;
 use crate::ir::Function;
 use crate::ir::lower::{Program, depends_on_coords, suggest};
-use crate::scene::{
-    Bounds, Camera, Light, LightKind, Object, Projection, RenderSettings, Scene,
-};
+use crate::scene::{Bounds, Camera, Light, LightKind, Object, Projection, RenderSettings, Scene};
 
 /// The colour of an object without a `color` property.
 pub const DEFAULT_OBJECT_COLOR: [f64; 3] = [0.8, 0.8, 0.8];
@@ -65,7 +63,11 @@ fn scalar(prog: &Program, src: usize, p: &Prop) -> Result<f64, Diag> {
             if v.is_finite() {
                 Ok(v)
             } else {
-                Err(span_diag(src, e.span, format!("`{}` must be finite, but it is {v}", p.name.name)))
+                Err(span_diag(
+                    src,
+                    e.span,
+                    format!("`{}` must be finite, but it is {v}", p.name.name),
+                ))
             }
         }
         other => Err(span_diag(
@@ -76,12 +78,22 @@ fn scalar(prog: &Program, src: usize, p: &Prop) -> Result<f64, Diag> {
     }
 }
 
-fn tuple(prog: &Program, src: usize, what: &str, elems: &[Expr], span: Span, n: usize) -> Result<Vec<f64>, Diag> {
+fn tuple(
+    prog: &Program,
+    src: usize,
+    what: &str,
+    elems: &[Expr],
+    span: Span,
+    n: usize,
+) -> Result<Vec<f64>, Diag> {
     if elems.len() != n {
         return Err(span_diag(
             src,
             span,
-            format!("{what} must have {n} components, but it has {}", elems.len()),
+            format!(
+                "{what} must have {n} components, but it has {}",
+                elems.len()
+            ),
         ));
     }
     elems
@@ -91,7 +103,11 @@ fn tuple(prog: &Program, src: usize, what: &str, elems: &[Expr], span: Span, n: 
             if v.is_finite() {
                 Ok(v)
             } else {
-                Err(span_diag(src, e.span, format!("{what} must be finite, but this is {v}")))
+                Err(span_diag(
+                    src,
+                    e.span,
+                    format!("{what} must be finite, but this is {v}"),
+                ))
             }
         })
         .collect()
@@ -140,7 +156,12 @@ fn norm(v: [f64; 3]) -> f64 {
 }
 
 fn camera(prog: &Program, src: usize, kw: &Ident, props: &[Prop]) -> Result<Camera, Diag> {
-    let ps = check_props(src, "camera", props, &["eye", "target", "up", "fov", "ortho"])?;
+    let ps = check_props(
+        src,
+        "camera",
+        props,
+        &["eye", "target", "up", "fov", "ortho"],
+    )?;
     let mut cam = Camera::default();
     if let Some(p) = find(&ps, "eye") {
         cam.eye = vec3(prog, src, p)?;
@@ -153,7 +174,11 @@ fn camera(prog: &Program, src: usize, kw: &Ident, props: &[Prop]) -> Result<Came
     }
     match (find(&ps, "fov"), find(&ps, "ortho")) {
         (Some(_), Some(o)) => {
-            return Err(span_diag(src, o.name.span, "a camera has either `fov` or `ortho`, not both".into()));
+            return Err(span_diag(
+                src,
+                o.name.span,
+                "a camera has either `fov` or `ortho`, not both".into(),
+            ));
         }
         (Some(p), None) => {
             let fov = scalar(prog, src, p)?;
@@ -186,7 +211,11 @@ fn camera(prog: &Program, src: usize, kw: &Ident, props: &[Prop]) -> Result<Came
     ];
     let at = |name: &str| find(&ps, name).map_or(kw.span, |p| p.value.span());
     if norm(dir) == 0.0 {
-        return Err(span_diag(src, at("target"), "the camera's `eye` and `target` are the same point".into()));
+        return Err(span_diag(
+            src,
+            at("target"),
+            "the camera's `eye` and `target` are the same point".into(),
+        ));
     }
     let u = cam.up;
     let cross = [
@@ -206,22 +235,39 @@ fn camera(prog: &Program, src: usize, kw: &Ident, props: &[Prop]) -> Result<Came
 }
 
 fn light(prog: &Program, src: usize, kw: &Ident, props: &[Prop]) -> Result<Light, Diag> {
-    let ps = check_props(src, "light", props, &["position", "direction", "color", "shadows"])?;
+    let ps = check_props(
+        src,
+        "light",
+        props,
+        &["position", "direction", "color", "shadows"],
+    )?;
     let kind = match (find(&ps, "position"), find(&ps, "direction")) {
         (Some(_), Some(d)) => {
-            return Err(span_diag(src, d.name.span, "a light has either `position` or `direction`, not both".into()));
+            return Err(span_diag(
+                src,
+                d.name.span,
+                "a light has either `position` or `direction`, not both".into(),
+            ));
         }
         (Some(p), None) => LightKind::Point(vec3(prog, src, p)?),
         (None, Some(p)) => {
             let d = vec3(prog, src, p)?;
             if norm(d) == 0.0 {
-                return Err(span_diag(src, p.value.span(), "a light's `direction` must not be zero".into()));
+                return Err(span_diag(
+                    src,
+                    p.value.span(),
+                    "a light's `direction` must not be zero".into(),
+                ));
             }
             LightKind::Directional(d)
         }
         (None, None) => {
-            return Err(span_diag(src, kw.span, "a light needs a `position` or a `direction`".into())
-                .with_help("e.g. `light { direction = (-1, -1, -1); }`"));
+            return Err(span_diag(
+                src,
+                kw.span,
+                "a light needs a `position` or a `direction`".into(),
+            )
+            .with_help("e.g. `light { direction = (-1, -1, -1); }`"));
         }
     };
     let color = match find(&ps, "color") {
@@ -232,7 +278,11 @@ fn light(prog: &Program, src: usize, kw: &Ident, props: &[Prop]) -> Result<Light
         Some(p) => boolean(src, p)?,
         None => false,
     };
-    Ok(Light { kind, color, shadows })
+    Ok(Light {
+        kind,
+        color,
+        shadows,
+    })
 }
 
 fn render(prog: &Program, src: usize, props: &[Prop]) -> Result<RenderSettings, Diag> {
@@ -240,7 +290,11 @@ fn render(prog: &Program, src: usize, props: &[Prop]) -> Result<RenderSettings, 
     let mut r = RenderSettings::default();
     if let Some(p) = find(&ps, "size") {
         let PropValue::Tuple(elems, span) = &p.value else {
-            return Err(span_diag(src, p.value.span(), "`size` must be a pair `(width, height)`".into()));
+            return Err(span_diag(
+                src,
+                p.value.span(),
+                "`size` must be a pair `(width, height)`".into(),
+            ));
         };
         let v = tuple(prog, src, "`size`", elems, *span, 2)?;
         let mut side = [0u32; 2];
@@ -249,7 +303,9 @@ fn render(prog: &Program, src: usize, props: &[Prop]) -> Result<RenderSettings, 
                 return Err(span_diag(
                     src,
                     e.span,
-                    format!("image sizes must be whole numbers from 1 to {MAX_IMAGE_SIDE}, but this is {s}"),
+                    format!(
+                        "image sizes must be whole numbers from 1 to {MAX_IMAGE_SIDE}, but this is {s}"
+                    ),
                 ));
             }
             side[i] = *s as u32;
@@ -276,7 +332,10 @@ fn bounds(
             return Err(span_diag(
                 src,
                 (min.1.0, max.1.1),
-                format!("empty bounds: the minimum {axis} ({}) is not below the maximum ({})", lo[i], hi[i]),
+                format!(
+                    "empty bounds: the minimum {axis} ({}) is not below the maximum ({})",
+                    lo[i], hi[i]
+                ),
             )
             .with_help("write `bounds = (min x, min y, min z) .. (max x, max y, max z);`"));
         }
@@ -301,12 +360,24 @@ pub fn build(prog: &Program, items: &[Item], src: usize, text_len: usize) -> Res
             Item::Let { .. } | Item::Fn { .. } => {}
             Item::Object { name, body, props } => {
                 if let Some(prev) = object_names.iter().find(|n| n.name == name.name) {
-                    return Err(span_diag(src, name.span, format!("object `{}` is defined twice", name.name))
-                        .with_secondary(src, prev.span.0..prev.span.1, "first defined here"));
+                    return Err(span_diag(
+                        src,
+                        name.span,
+                        format!("object `{}` is defined twice", name.name),
+                    )
+                    .with_secondary(
+                        src,
+                        prev.span.0..prev.span.1,
+                        "first defined here",
+                    ));
                 }
                 let function = prog.lower(body, src)?;
                 if !depends_on_coords(&function) {
-                    return Err(span_diag(src, body.span, "this is not a shape: it does not depend on x, y or z".into()));
+                    return Err(span_diag(
+                        src,
+                        body.span,
+                        "this is not a shape: it does not depend on x, y or z".into(),
+                    ));
                 }
                 let ps = check_props(src, "an object", props, &["color"])?;
                 let color = match find(&ps, "color") {
@@ -345,8 +416,10 @@ pub fn build(prog: &Program, items: &[Item], src: usize, text_len: usize) -> Res
         }
     }
     if objects.is_empty() {
-        return Err(span_diag(src, (text_len, text_len), "the scene has no object".into())
-            .with_help("add one, e.g. `object ball = sphere(1);`"));
+        return Err(
+            span_diag(src, (text_len, text_len), "the scene has no object".into())
+                .with_help("add one, e.g. `object ball = sphere(1);`"),
+        );
     }
     if lights.is_empty() {
         lights.push(Light::default_light());
@@ -371,7 +444,11 @@ fn duplicate_block(src: usize, kw: &Ident, prev: &Ident) -> Diag {
 /// model does not use z).
 pub fn vm_scene(name: String, function: Function, src: usize) -> Result<Scene, Diag> {
     if !depends_on_coords(&function) {
-        return Err(Diag::new(src, 0..0, "this is not a shape: the result does not depend on x, y or z".into()));
+        return Err(Diag::new(
+            src,
+            0..0,
+            "this is not a shape: the result does not depend on x, y or z".into(),
+        ));
     }
     let flat = !function.uses_vars()[2];
     let camera = if flat {

@@ -101,8 +101,10 @@ pub fn parse_vm(text: &str, src: usize) -> Result<Function, Diag> {
         }
         let span = |(at, s): (usize, &str)| at..at + s.len();
         let Some(&op_word) = w.get(1) else {
-            return Err(Diag::new(src, span(w[0]), format!("`{}` has no op", w[0].1))
-                .with_help("each line is `_id op args…`, e.g. `_3 add _1 _2`"));
+            return Err(
+                Diag::new(src, span(w[0]), format!("`{}` has no op", w[0].1))
+                    .with_help("each line is `_id op args…`, e.g. `_3 add _1 _2`"),
+            );
         };
         let op = vm_op(op_word.1).ok_or_else(|| {
             let d = Diag::new(src, span(op_word), format!("unknown op `{}`", op_word.1));
@@ -133,7 +135,11 @@ pub fn parse_vm(text: &str, src: usize) -> Result<Function, Diag> {
         let operand = |i: usize| -> Result<ValueId, Diag> {
             let a = args[i];
             ids.get(a.1).map(|(v, _)| *v).ok_or_else(|| {
-                Diag::new(src, span(a), format!("`{}` is not defined before this line", a.1))
+                Diag::new(
+                    src,
+                    span(a),
+                    format!("`{}` is not defined before this line", a.1),
+                )
             })
         };
         let v = match op {
@@ -143,7 +149,11 @@ pub fn parse_vm(text: &str, src: usize) -> Result<Function, Diag> {
                 match a.1.parse::<f64>() {
                     Ok(c) if c.is_finite() => b.constant(c),
                     _ => {
-                        return Err(Diag::new(src, span(a), format!("bad number literal `{}`", a.1)));
+                        return Err(Diag::new(
+                            src,
+                            span(a),
+                            format!("bad number literal `{}`", a.1),
+                        ));
                     }
                 }
             }
@@ -162,8 +172,10 @@ pub fn parse_vm(text: &str, src: usize) -> Result<Function, Diag> {
             }
         };
         if let Some((_, first)) = ids.get(w[0].1) {
-            return Err(Diag::new(src, span(w[0]), format!("`{}` is defined twice", w[0].1))
-                .with_secondary(src, *first..*first + w[0].1.len(), "first defined here"));
+            return Err(
+                Diag::new(src, span(w[0]), format!("`{}` is defined twice", w[0].1))
+                    .with_secondary(src, *first..*first + w[0].1.len(), "first defined here"),
+            );
         }
         ids.insert(w[0].1, (v, w[0].0));
         last = Some(v);
