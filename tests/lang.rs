@@ -915,10 +915,7 @@ fn example_bounds_enclose_the_surface() {
                 }
             }
             if stem == "double_sphere" {
-                assert!(
-                    (0.0..0.05).contains(&min_inside),
-                    "{stem}: {min_inside}"
-                );
+                assert!((0.0..0.05).contains(&min_inside), "{stem}: {min_inside}");
             } else {
                 assert!(
                     min_inside < 0.0,
