@@ -874,6 +874,9 @@ fn every_example_loads() {
     for f in &files {
         let s = load_scene(f).unwrap_or_else(|e| panic!("{e}"));
         assert!(!s.objects.is_empty());
+        for o in &s.objects {
+            ibeam::ir::validate::validate(&o.function).unwrap_or_else(|e| panic!("{e}"));
+        }
         assert!(
             s.lights.iter().any(|l| l.shadows),
             "{} has no shadowed light",
@@ -1099,4 +1102,15 @@ fn vm_benchmark_models() {
         s.camera.projection,
         Projection::Perspective { .. }
     ));
+}
+
+/// The example at the top of docs/language.md loads.
+#[test]
+fn documented_example_loads() {
+    let doc = std::fs::read_to_string(root().join("docs/language.md")).expect("docs exist");
+    let start = doc.find("```text\n").expect("an example block") + 8;
+    let len = doc[start..].find("```").expect("closed block");
+    let s = scene(&doc[start..start + len]);
+    assert_eq!(s.objects.len(), 2);
+    assert!(s.lights[0].shadows);
 }

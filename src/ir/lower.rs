@@ -885,3 +885,33 @@ pub fn depends_on_coords(f: &Function) -> bool {
     }
     false
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn suggestions_only_for_close_names() {
+        let names = ["sphere", "box", "torus"];
+        assert_eq!(suggest("sphre", names.iter().copied()), Some("sphere"));
+        assert_eq!(suggest("bx", names.iter().copied()), Some("box"));
+        assert_eq!(suggest("cylinder", names.iter().copied()), None);
+    }
+
+    #[test]
+    fn right_angles_are_exact() {
+        assert_eq!(cos_sin_deg(90.0), (0.0, 1.0));
+        assert_eq!(cos_sin_deg(-90.0), (0.0, -1.0));
+        assert_eq!(cos_sin_deg(540.0), (-1.0, 0.0));
+        let (c, s) = cos_sin_deg(30.0);
+        assert!((c - 0.75f64.sqrt()).abs() < 1e-15 && (s - 0.5).abs() < 1e-15);
+    }
+
+    #[test]
+    fn integer_exponents() {
+        assert_eq!(int_exponent(3.0), Some(3));
+        assert_eq!(int_exponent(-2.0), Some(-2));
+        assert_eq!(int_exponent(0.5), None);
+        assert_eq!(int_exponent(1e10), None);
+    }
+}

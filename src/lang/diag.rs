@@ -114,6 +114,8 @@ impl Sources {
         } else if let Some(h) = &d.help {
             rendered.push_str(&format!("help: {h}\n"));
         }
+        rendered.truncate(rendered.trim_end().len());
+        rendered.push('\n');
         LoadError {
             message: d.message.clone(),
             line,
@@ -147,5 +149,39 @@ pub fn error_without_position(file: &str, message: String) -> LoadError {
         col: 0,
         help: None,
         file: file.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn line_and_column_are_one_based_in_characters() {
+        let t = "ab\nçd\n";
+        assert_eq!(line_col(t, 0), (1, 1));
+        assert_eq!(line_col(t, 2), (1, 3));
+        assert_eq!(line_col(t, 3), (2, 1));
+        assert_eq!(line_col(t, 5), (2, 2));
+        assert_eq!(line_col(t, 99), (3, 1));
+    }
+
+    #[test]
+    fn rendering_has_header_snippet_and_help() {
+        let mut s = Sources::default();
+        let src = s.add("a.ib", "let a = 1;\nobject o = b;\n");
+        let e = s.render(
+            &Diag::new(src, 22..23, "unknown variable `b`".into()).with_help("did you mean `a`?"),
+        );
+        assert_eq!((e.line, e.col), (2, 12));
+        let lines: Vec<&str> = e.rendered.lines().collect();
+        assert_eq!(lines[0], "a.ib:2:12: error: unknown variable `b`");
+        assert!(lines.iter().any(|l| l.ends_with("| object o = b;")));
+        assert!(
+            lines
+                .iter()
+                .any(|l| l.trim_end().ends_with("|            ^"))
+        );
+        assert!(lines.last().unwrap().ends_with("= help: did you mean `a`?"));
     }
 }

@@ -121,11 +121,18 @@ impl<'a> Iterator for Lexer<'a> {
             Err(()) => {
                 let text = self.inner.slice();
                 let shown = text.chars().next().unwrap_or(' ');
-                Err(Diag::new(
+                let d = Diag::new(
                     self.src,
                     span,
                     format!("unexpected character `{}`", shown.escape_debug()),
-                ))
+                );
+                Err(match shown {
+                    '²' => d.with_help("write powers with `^`, e.g. `x^2`"),
+                    '³' => d.with_help("write powers with `^`, e.g. `x^3`"),
+                    '·' | '×' => d.with_help("write products with `*`"),
+                    '−' => d.with_help("this is a Unicode minus sign; use `-`"),
+                    _ => d,
+                })
             }
         })
     }
@@ -141,5 +148,56 @@ fn bad_number_help(text: &str) -> String {
     } else {
         "a number is digits, an optional `.` and fraction, and an optional exponent like `e-3`"
             .into()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn kinds(text: &str) -> Vec<Tok<'_>> {
+        Lexer::new(text, 0)
+            .map(|t| {
+                t.map(|(_, k, _)| k)
+                    .unwrap_or_else(|d| panic!("{}", d.message))
+            })
+            .collect()
+    }
+
+    #[test]
+    fn numbers_names_keywords_and_comments() {
+        assert_eq!(
+            kinds("let r2 = .5e1 // c\n..x"),
+            vec![
+                Tok::Let,
+                Tok::Ident("r2"),
+                Tok::Eq,
+                Tok::Num(".5e1"),
+                Tok::DotDot,
+                Tok::Ident("x")
+            ]
+        );
+        assert_eq!(
+            kinds("1 2. 3.25 4e-3"),
+            vec![
+                Tok::Num("1"),
+                Tok::Num("2."),
+                Tok::Num("3.25"),
+                Tok::Num("4e-3")
+            ]
+        );
+        assert_eq!(kinds("lettuce"), vec![Tok::Ident("lettuce")]);
+    }
+
+    #[test]
+    fn bad_numbers_and_characters_are_errors_with_spans() {
+        let e = Lexer::new("x + 1.2.3", 0).nth(2).unwrap().unwrap_err();
+        assert_eq!(
+            (e.span, e.message.as_str()),
+            (4..9, "bad number literal `1.2.3`")
+        );
+        let e = Lexer::new("x²", 0).nth(1).unwrap().unwrap_err();
+        assert_eq!(e.span, 1..3);
+        assert_eq!(e.help.as_deref(), Some("write powers with `^`, e.g. `x^2`"));
     }
 }
