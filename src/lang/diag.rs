@@ -106,8 +106,14 @@ impl Sources {
         };
         if let Ok(snippet) = term::emit_into_string(&config, &self.files, &diagnostic) {
             // codespan's own first two lines repeat the message and the
-            // location, which the header above already gives.
-            for l in snippet.lines().skip(2) {
+            // location, which the header above already gives, and its
+            // third is an empty gutter; the source line comes right after
+            // the header instead.
+            let mut lines = snippet.lines().skip(2).peekable();
+            if lines.peek().is_some_and(|l| l.trim() == "|") {
+                lines.next();
+            }
+            for l in lines {
                 rendered.push_str(l.trim_end());
                 rendered.push('\n');
             }
