@@ -1114,3 +1114,141 @@ fn documented_example_loads() {
     assert_eq!(s.objects.len(), 2);
     assert!(s.lights[0].shadows);
 }
+
+// ------------------------------------------------------------ robustness
+
+const FRAGMENTS: &[&str] = &[
+    "object",
+    "o",
+    "=",
+    "x",
+    "y",
+    "z",
+    "1",
+    "2.5",
+    "(",
+    ")",
+    ",",
+    ";",
+    "{",
+    "}",
+    "+",
+    "-",
+    "*",
+    "/",
+    "^",
+    "sphere",
+    "min",
+    "blend",
+    "translate",
+    "rotate_z",
+    "scale",
+    "let",
+    "fn",
+    "f",
+    "a",
+    "camera",
+    "light",
+    "bounds",
+    "..",
+    "render",
+    "eye",
+    "fov",
+    "color",
+    "true",
+    "0",
+    "1e",
+    "@",
+    "// c\n",
+    "\n",
+    "pow",
+    "-1",
+    "0.5",
+];
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(300))]
+
+    /// Any token soup loads or fails with a positioned diagnostic; the
+    /// loader never panics.
+    #[test]
+    fn token_soup_never_panics(picks in proptest::collection::vec(0..FRAGMENTS.len(), 0..40)) {
+        let src: Vec<&str> = picks.iter().map(|&i| FRAGMENTS[i]).collect();
+        let src = src.join(" ");
+        if let Err(e) = load_scene_source("soup.ib", &src) {
+            proptest::prop_assert!(!e.message.contains("internal error"), "{}", e);
+            proptest::prop_assert!(e.line >= 1 && e.col >= 1, "{}", e);
+            proptest::prop_assert!(e.rendered.starts_with("soup.ib:") || e.rendered.starts_with("prelude.ib:"));
+        }
+    }
+
+    /// Random (mostly well-formed) expression trees over every built-in,
+    /// with right and wrong arities, load or fail with a diagnostic; the
+    /// loader never panics.
+    #[test]
+    fn random_expressions_never_panic(e in expr_strategy()) {
+        let src = format!("fn g(a, b) = a * x - b;\nlet k = 2;\nobject o = {e};");
+        if let Err(err) = load_scene_source("rand.ib", &src) {
+            proptest::prop_assert!(!err.message.contains("internal error"), "{}", err);
+            proptest::prop_assert!(err.line >= 1 && err.col >= 1, "{}", err);
+        }
+    }
+}
+
+fn expr_strategy() -> impl proptest::strategy::Strategy<Value = String> {
+    use proptest::prelude::*;
+    let leaf = prop_oneof![
+        Just("x".to_string()),
+        Just("y".to_string()),
+        Just("z".to_string()),
+        Just("k".to_string()),
+        Just("q".to_string()),
+        (-3i32..4).prop_map(|v| v.to_string()),
+        Just("0.5".to_string()),
+    ];
+    leaf.prop_recursive(5, 40, 4, |inner| {
+        let names = [
+            "sqrt",
+            "abs",
+            "exp",
+            "ln",
+            "sin",
+            "cos",
+            "square",
+            "min",
+            "max",
+            "pow",
+            "atan2",
+            "union",
+            "intersect",
+            "difference",
+            "complement",
+            "blend",
+            "translate",
+            "scale",
+            "rotate_x",
+            "rotate_y",
+            "rotate_z",
+            "sphere",
+            "box",
+            "torus",
+            "plane",
+            "g",
+            "h",
+        ];
+        prop_oneof![
+            (
+                0..names.len(),
+                proptest::collection::vec(inner.clone(), 0..5)
+            )
+                .prop_map(move |(i, args)| format!(
+                    "{}({})",
+                    names[i],
+                    args.join(", ")
+                )),
+            (inner.clone(), 0..5usize, inner.clone())
+                .prop_map(|(a, op, b)| format!("({a} {} {b})", ["+", "-", "*", "/", "^"][op])),
+            inner.prop_map(|a| format!("-{a}")),
+        ]
+    })
+}
