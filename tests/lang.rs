@@ -162,6 +162,16 @@ fn let_and_fn_definitions() {
 }
 
 #[test]
+fn formulas_may_be_constant_but_objects_may_not() {
+    let f = formula("2 * pi");
+    assert_eq!(f.len(), 1);
+    assert_close(eval(&f, P), 2.0 * std::f64::consts::PI);
+    let e = function_from_formula("x +").unwrap_err();
+    assert_eq!((e.line, e.col, e.file.as_str()), (1, 4, "<formula>"));
+    assert!(err("object o = 2 * pi;").message.contains("not a shape"));
+}
+
+#[test]
 fn hash_consing_merges_repeats() {
     let f = formula("x^2 + x^2");
     let powis = f.ops.iter().filter(|o| matches!(o, Op::Powi(..))).count();

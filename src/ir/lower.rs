@@ -161,6 +161,17 @@ impl<'a> Program<'a> {
         }
     }
 
+    /// Lowers `body` like [`Program::lower`], but also accepts an
+    /// expression that does not depend on x, y or z (its function is one
+    /// constant op).
+    pub fn lower_any(&self, body: &Expr, src: usize) -> Result<Function, Diag> {
+        let mut l = Lowerer::new(self);
+        let ctx = Ctx { scope: None, src };
+        let v = l.lower(body, &ctx, IDENTITY)?;
+        let root = l.node(v);
+        Ok(l.b.finish(root))
+    }
+
     /// Evaluates `e` (from source `src`) as a constant; `what` names the
     /// value in the error when it depends on x, y or z.
     pub fn constant(&self, e: &Expr, src: usize, what: &str) -> Result<f64, Diag> {

@@ -94,7 +94,8 @@ fn load_ib(prelude: usize, src: usize, sources: &Sources) -> Result<Scene, diag:
 }
 
 /// Lowers one expression over x, y, z (the prelude is available) to an
-/// unsimplified IR function.
+/// unsimplified IR function. Unlike an object, the expression may be a
+/// constant.
 pub fn function_from_formula(formula: &str) -> Result<Function, LoadError> {
     on_big_stack(|| {
         let mut sources = Sources::default();
@@ -104,7 +105,7 @@ pub fn function_from_formula(formula: &str) -> Result<Function, LoadError> {
             let prelude_items = parser::parse_file(PRELUDE, prelude)?;
             let e = parser::parse_expr(formula, src)?;
             let prog = Program::new(&[(prelude, &prelude_items)])?;
-            prog.lower(&e, src)
+            prog.lower_any(&e, src)
         };
         lower().map_err(|d| sources.render(&d))
     })
