@@ -1262,3 +1262,53 @@ fn expr_strategy() -> impl proptest::strategy::Strategy<Value = String> {
         ]
     })
 }
+
+#[test]
+fn nested_calls_of_one_function_are_not_recursion() {
+    let s = scene("fn f(a) = a + 1;\nobject o = f(f(f(x)));");
+    assert_close(eval(&s.objects[0].function, P), P[0] + 3.0);
+    let s = scene("fn f(a) = translate(a, 1, 0, 0);\nobject o = f(f(sphere(0.5)));");
+    assert_close(eval(&s.objects[0].function, [2.0, 0.0, 0.0]), -0.5);
+    // but a definition used inside its own argument is
+    assert_err(
+        "fn f(a) = a;\nfn g(b) = f(g(b));\nobject o = g(x);",
+        "recursive use of `g`",
+        2,
+        13,
+    );
+}
+
+#[test]
+fn deep_inlining_is_limited_without_overflow() {
+    // each body is 200 levels deep and calls the previous one at the
+    // bottom: 100 of them inline to 20,000 levels
+    let mut src = String::from("fn f0(a) = a + x;\n");
+    for i in 1..100 {
+        src.push_str(&format!(
+            "fn f{i}(a) = {}f{}(a){};\n",
+            "sin(".repeat(200),
+            i - 1,
+            ")".repeat(200)
+        ));
+    }
+    src.push_str("object o = f99(y);");
+    let e = err(&src);
+    assert!(e.message.contains("nested too deeply"), "{e}");
+    // 40 of them (8,000 levels) are fine
+    let mut src = String::from("fn f0(a) = a + x;\n");
+    for i in 1..40 {
+        src.push_str(&format!(
+            "fn f{i}(a) = {}f{}(a){};\n",
+            "sin(".repeat(200),
+            i - 1,
+            ")".repeat(200)
+        ));
+    }
+    src.push_str("object o = f39(y);");
+    let s = scene(&src);
+    let mut v = P[1] + P[0];
+    for _ in 0..39 * 200 {
+        v = v.sin();
+    }
+    assert_close(eval(&s.objects[0].function, P), v);
+}

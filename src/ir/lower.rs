@@ -30,6 +30,10 @@ pub const MAX_CALL_DEPTH: usize = 128;
 /// Lowering steps (expression nodes visited) allowed per object.
 pub const MAX_STEPS: u64 = 5_000_000;
 
+/// How deeply lowering may recurse (expression levels plus inlined
+/// bodies); with the loader's stack this leaves a wide margin.
+pub const MAX_RECURSION: usize = 16_384;
+
 /// The functions built into the language, with their argument counts
 /// (`None`: two or more).
 pub const BUILTINS: &[(&str, Option<usize>)] = &[
@@ -260,6 +264,9 @@ struct Thunk<'a> {
     id: usize,
     expr: &'a Expr,
     ctx: Ctx<'a>,
+    /// Definitions being expanded where the call was written: the argument
+    /// belongs to the caller, so only these count for recursion.
+    stack_len: usize,
 }
 
 /// The parameters visible in a function body.
@@ -299,6 +306,7 @@ struct Lowerer<'p, 'a> {
     thunk_memo: HashMap<(usize, Env), Val>,
     next_thunk: usize,
     steps: u64,
+    recursion: usize,
 }
 
 fn plural(n: usize) -> &'static str {
@@ -315,6 +323,7 @@ impl<'p, 'a> Lowerer<'p, 'a> {
             thunk_memo: HashMap::new(),
             next_thunk: 0,
             steps: 0,
+            recursion: 0,
         }
     }
 
@@ -381,6 +390,23 @@ impl<'p, 'a> Lowerer<'p, 'a> {
     }
 
     fn lower(&mut self, e: &'a Expr, ctx: &Ctx<'a>, env: Env) -> Result<Val, Diag> {
+        if self.recursion >= MAX_RECURSION {
+            return Err(ctx
+                .diag(
+                    e.span,
+                    format!(
+                        "definitions nested too deeply (over {MAX_RECURSION} levels when inlined)"
+                    ),
+                )
+                .with_help("split the scene into fewer nested definitions"));
+        }
+        self.recursion += 1;
+        let r = self.lower_node(e, ctx, env);
+        self.recursion -= 1;
+        r
+    }
+
+    fn lower_node(&mut self, e: &'a Expr, ctx: &Ctx<'a>, env: Env) -> Result<Val, Diag> {
         self.steps += 1;
         if self.steps > MAX_STEPS {
             return Err(ctx
@@ -510,7 +536,10 @@ impl<'p, 'a> Lowerer<'p, 'a> {
             if let Some(v) = self.thunk_memo.get(&(t.id, env)) {
                 return Ok(*v);
             }
-            let v = self.lower(t.expr, &t.ctx, env)?;
+            let inner = self.stack.split_off(t.stack_len.min(self.stack.len()));
+            let v = self.lower(t.expr, &t.ctx, env);
+            self.stack.extend(inner);
+            let v = v?;
             self.thunk_memo.insert((t.id, env), v);
             return Ok(v);
         }
@@ -543,6 +572,7 @@ impl<'p, 'a> Lowerer<'p, 'a> {
         ctx: &Ctx<'a>,
         env: Env,
     ) -> Result<Val, Diag> {
+        let stack_len = self.stack.len();
         self.enter(def, span, ctx)?;
         let memo_key = (def.id, env);
         let result = if args.is_empty() {
@@ -573,6 +603,7 @@ impl<'p, 'a> Lowerer<'p, 'a> {
                         id,
                         expr: a,
                         ctx: ctx.clone(),
+                        stack_len,
                     }),
                 ));
             }
