@@ -537,6 +537,12 @@ fn non_integer_exponent() {
         14,
     );
     assert_err("object o = x^(1/3);", "must be an integer", 1, 14);
+    assert_err(
+        "object o = x^1e10;",
+        "the exponent of `^` is too large",
+        1,
+        14,
+    );
 }
 
 #[test]

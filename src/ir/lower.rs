@@ -427,6 +427,10 @@ impl<'p, 'a> Lowerer<'p, 'a> {
                 match exp {
                     Val::Const(c) => match int_exponent(c) {
                         Some(k) => self.powi(base, k, ctx, e.span),
+                        None if c.fract() == 0.0 => Err(ctx.diag(
+                            n.span,
+                            format!("the exponent of `^` is too large ({c}; at most 2^31 - 1 in size)"),
+                        )),
                         None => Err(ctx
                             .diag(n.span, format!("the exponent of `^` must be an integer, but it is {c}"))
                             .with_help(hint)),
