@@ -339,6 +339,18 @@ fn unexpected_token() {
     );
     assert_err("object o = x y;", "unexpected name `y`", 1, 14);
     assert_err("object o = x @ y;", "unexpected character `@`", 1, 14);
+    let e = assert_err(
+        "object o = x { color = (1, 0, 0); };",
+        "unexpected `;`",
+        1,
+        36,
+    );
+    assert_eq!(
+        e.help.as_deref(),
+        Some("a block `{ … }` is not followed by `;`")
+    );
+    let e = assert_err("object o = x\nobject p = y;", "unexpected `object`", 2, 1);
+    assert!(e.help.unwrap().ends_with("is a `;` missing before this?"));
 }
 
 #[test]

@@ -184,7 +184,14 @@ fn convert(e: ParseError<usize, Tok<'_>, Diag>, src: usize, text: &str) -> Diag 
         } => {
             let shown = describe(&tok, text.get(l..r).unwrap_or(""));
             let d = Diag::new(src, l..r, format!("unexpected {shown}"));
+            let after_block = text.get(..l).and_then(|t| t.trim_end().chars().last()) == Some('}');
+            if tok == Tok::Semi && after_block {
+                return d.with_help("a block `{ … }` is not followed by `;`");
+            }
             match expected_help(&expected) {
+                Some(h) if expected.iter().any(|t| t == "\";\"") => {
+                    d.with_help(format!("{h}; is a `;` missing before this?"))
+                }
                 Some(h) => d.with_help(h),
                 None => d,
             }
