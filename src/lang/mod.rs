@@ -1,9 +1,30 @@
 //! The scene language: lexer, parser glue, AST, diagnostics, the prelude of
 //! primitives, and the importer for Fidget's `.vm` format.
+//!
+//! See `docs/language.md` for the language reference. Entry points:
+//! [`load_scene`], [`load_scene_source`] and [`function_from_formula`].
 
+pub mod ast;
+pub mod diag;
+pub mod lexer;
+pub mod parser;
+pub mod scene;
+pub mod vm;
+
+use crate::ir::Function;
+use crate::ir::lower::Program;
 use crate::scene::Scene;
+use diag::Sources;
 use std::fmt;
 use std::path::Path;
+
+/// The prelude's source text.
+pub const PRELUDE: &str = include_str!("prelude.ib");
+
+/// Stack for the loader thread: the parser caps the tree depth and
+/// lowering caps the call depth, and this leaves room for both limits at
+/// once whatever thread calls us.
+const LOADER_STACK_BYTES: usize = 256 << 20;
 
 /// A load failure, already rendered as `file:line:col: error: message`
 /// followed by the source line, a caret and any hint.
@@ -11,6 +32,16 @@ use std::path::Path;
 pub struct LoadError {
     /// The full rendered diagnostic text.
     pub rendered: String,
+    /// The one-line message (without location).
+    pub message: String,
+    /// 1-based line of the error (0 when the error has no position).
+    pub line: usize,
+    /// 1-based column, in characters (0 when the error has no position).
+    pub col: usize,
+    /// The hint shown as `help: …`, if any.
+    pub help: Option<String>,
+    /// The name of the file the position refers to.
+    pub file: String,
 }
 
 impl fmt::Display for LoadError {
@@ -24,8 +55,82 @@ impl std::error::Error for LoadError {}
 /// Reads and lowers a scene file: `*.vm` is read as Fidget's SSA format,
 /// anything else as an ibeam scene.
 pub fn load_scene(path: &Path) -> Result<Scene, LoadError> {
-    let _ = path;
-    Err(LoadError {
-        rendered: "scene loading is not built yet".into(),
+    let name = path.display().to_string();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| diag::error_without_position(&name, format!("cannot read `{name}`: {e}")))?;
+    load_scene_source(&name, &text)
+}
+
+/// Lowers scene text; `file_name` picks the format by its extension (as
+/// in [`load_scene`]) and names the file in diagnostics.
+pub fn load_scene_source(file_name: &str, source: &str) -> Result<Scene, LoadError> {
+    let is_vm = Path::new(file_name)
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("vm"));
+    on_big_stack(|| {
+        let mut sources = Sources::default();
+        if is_vm {
+            let src = sources.add(file_name, source);
+            let stem = Path::new(file_name)
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "model".into());
+            vm::parse_vm(source, src)
+                .and_then(|f| scene::vm_scene(stem, f, src))
+                .map_err(|d| sources.render(&d))
+        } else {
+            let prelude = sources.add("prelude.ib", PRELUDE);
+            let src = sources.add(file_name, source);
+            load_ib(prelude, src, &sources).map_err(|d| sources.render(&d))
+        }
+    })
+}
+
+fn load_ib(prelude: usize, src: usize, sources: &Sources) -> Result<Scene, diag::Diag> {
+    let prelude_items = parser::parse_file(sources.text(prelude), prelude)?;
+    let items = parser::parse_file(sources.text(src), src)?;
+    let prog = Program::new(&[(prelude, &prelude_items), (src, &items)])?;
+    scene::build(&prog, &items, src, sources.text(src).len())
+}
+
+/// Lowers one expression over x, y, z (the prelude is available) to an
+/// unsimplified IR function. Unlike an object, the expression may be a
+/// constant.
+pub fn function_from_formula(formula: &str) -> Result<Function, LoadError> {
+    on_big_stack(|| {
+        let mut sources = Sources::default();
+        let prelude = sources.add("prelude.ib", PRELUDE);
+        let src = sources.add("<formula>", formula);
+        let lower = || -> Result<Function, diag::Diag> {
+            let prelude_items = parser::parse_file(PRELUDE, prelude)?;
+            let e = parser::parse_expr(formula, src)?;
+            let prog = Program::new(&[(prelude, &prelude_items)])?;
+            prog.lower_any(&e, src)
+        };
+        lower().map_err(|d| sources.render(&d))
+    })
+}
+
+/// Runs `f` on a thread with a large stack, so that the bounded recursion
+/// of dropping and lowering deep (but accepted) trees never overflows the
+/// caller's stack, whatever its size.
+fn on_big_stack<T: Send>(f: impl FnOnce() -> Result<T, LoadError> + Send) -> Result<T, LoadError> {
+    std::thread::scope(|s| {
+        let handle = std::thread::Builder::new()
+            .name("ibeam-loader".into())
+            .stack_size(LOADER_STACK_BYTES)
+            .spawn_scoped(s, f)
+            .map_err(|e| {
+                diag::error_without_position(
+                    "<loader>",
+                    format!("cannot start the loader thread: {e}"),
+                )
+            })?;
+        handle.join().unwrap_or_else(|_| {
+            Err(diag::error_without_position(
+                "<loader>",
+                "internal error: the scene loader panicked".into(),
+            ))
+        })
     })
 }
