@@ -1,0 +1,242 @@
+//! Beams: blocks of pixels traced together with interval hulls.
+//!
+//! A block's rays form a beam; its hull over a ray-parameter interval T is
+//! exact up to rounding ([`super::camera`]). The block's T range (the union
+//! of its pixels' slab ranges) is bisected front to back down to a width
+//! comparable with the block's footprint; pieces where every live object is
+//! strictly positive are rejected. If all of T is rejected the block is
+//! background and no ray is traced. Otherwise, with [t0, ta] rejected, the
+//! inclusion test checks F over the hull of the block's points at t = ta
+//! (strictly positive) and at some tb > ta (strictly negative): every ray
+//! then has its first root in [ta, tb] and each pixel only refines that
+//! bracket on the point evaluator. Blocks that are neither split in four,
+//! keeping the rejected prefix and dropping objects proven positive over
+//! the whole remaining beam; single pixels get [`super::ray::trace_ray`].
+//!
+//! An included block's depth is the root that the bracket refinement
+//! converges to; the first root is guaranteed to lie in [ta, tb], whose
+//! width is at most a few block footprints, so a second crossing inside
+//! that bracket (a feature thinner than the block footprint) can shift the
+//! depth within the bracket, never lose the surface.
+
+use super::camera::PixelRay;
+use super::ray::{refine, trace_ray};
+use super::{Class, Hit, Tracer};
+use crate::interval::Interval;
+use crate::render::stats::RenderStats;
+
+// Rejection pieces per block sweep before the block is declared undecided.
+const MAX_SWEEP_PIECES: usize = 256;
+
+/// The per-pixel data of one tile.
+pub(crate) struct TileRays {
+    /// Left column of the tile.
+    pub x0: u32,
+    /// Top row of the tile.
+    pub y0: u32,
+    /// Tile width in pixels.
+    pub w: u32,
+    /// Per-pixel rays, row-major within the tile.
+    pub rays: Vec<PixelRay>,
+    /// Per-pixel slab ranges (None: the ray misses the bounds).
+    pub slabs: Vec<Option<(f64, f64)>>,
+    /// Per-pixel results.
+    pub hits: Vec<Option<Hit>>,
+    /// How each pixel was decided.
+    pub class: Vec<Class>,
+    /// Included blocks (x0, y0, x1, y1 in tile coordinates), for shadow beams.
+    pub included: Vec<(u32, u32, u32, u32)>,
+}
+
+impl TileRays {
+    fn idx(&self, i: u32, j: u32) -> usize {
+        (j * self.w + i) as usize
+    }
+}
+
+/// A block of pixels in tile coordinates, half-open.
+#[derive(Copy, Clone, Debug)]
+struct Block {
+    x0: u32,
+    y0: u32,
+    x1: u32,
+    y1: u32,
+}
+
+/// Traces every pixel of the tile with beams.
+pub(crate) fn trace_tile(tr: &Tracer<'_>, tile: &mut TileRays, h: u32, st: &mut RenderStats) {
+    let live: Vec<u32> = (0..tr.evals.len() as u32).collect();
+    let b = Block {
+        x0: 0,
+        y0: 0,
+        x1: tile.w,
+        y1: h,
+    };
+    block(tr, tile, b, 0.0, &live, st);
+}
+
+fn block(
+    tr: &Tracer<'_>,
+    tile: &mut TileRays,
+    b: Block,
+    t_floor: f64,
+    live: &[u32],
+    st: &mut RenderStats,
+) {
+    // The block's T range from its pixels' slabs.
+    let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
+    for j in b.y0..b.y1 {
+        for i in b.x0..b.x1 {
+            if let Some((a, c)) = tile.slabs[tile.idx(i, j)] {
+                t0 = t0.min(a);
+                t1 = t1.max(c);
+            }
+        }
+    }
+    let single = b.x1 - b.x0 == 1 && b.y1 - b.y0 == 1;
+    t0 = t0.max(t_floor);
+    if !(t0 <= t1) || live.is_empty() {
+        if !single {
+            st.blocks_rejected += 1;
+        }
+        set_block(tile, b, Class::Background);
+        return;
+    }
+    if single {
+        let k = tile.idx(b.x0, b.y0);
+        let (pt0, pt1) = tile.slabs[k].unwrap_or((t0, t1));
+        let ray = tile.rays[k];
+        tile.hits[k] = trace_ray(tr, &ray, pt0.max(t_floor), pt1, live, st);
+        tile.class[k] = Class::Ray;
+        return;
+    }
+    // Screen extents of the pixel centres.
+    let xs = (
+        (b.x0 + tile.x0) as f64 + 0.5,
+        (b.x1 + tile.x0) as f64 - 0.5,
+    );
+    let ys = (
+        (b.y0 + tile.y0) as f64 + 0.5,
+        (b.y1 + tile.y0) as f64 - 0.5,
+    );
+    let side = f64::from((b.x1 - b.x0).max(b.y1 - b.y0));
+    let min_w = |t: f64| side * tr.cam.spacing(t).max(1e-9);
+    let eval_min = |t: Interval, st: &mut RenderStats| -> Interval {
+        let hb = tr.cam.hull(xs, ys, t);
+        let mut f = Interval::point(f64::INFINITY);
+        for &k in live {
+            let v = tr.interval(k as usize, hb, st);
+            if v.is_empty() {
+                continue;
+            }
+            f = f.min(v);
+        }
+        f
+    };
+    // Front-to-back rejection sweep.
+    let mut stack = vec![(t0, t1)];
+    let mut pieces = 0usize;
+    let mut found: Option<(f64, f64)> = None;
+    while let Some((a, c)) = stack.pop() {
+        pieces += 1;
+        let f = eval_min(Interval::new(a, c), st);
+        if f.lo > 0.0 {
+            continue;
+        }
+        if c - a <= min_w(a) || pieces >= MAX_SWEEP_PIECES {
+            found = Some((a, c));
+            break;
+        }
+        let m = 0.5 * (a + c);
+        stack.push((m, c));
+        stack.push((a, m));
+    }
+    let Some((ta, tb)) = found else {
+        st.blocks_rejected += 1;
+        set_block(tile, b, Class::Background);
+        return;
+    };
+    // Inclusion test: positive at ta, negative at some tb' ahead.
+    let fa = eval_min(Interval::point(ta), st);
+    if fa.lo > 0.0 {
+        let w = (tb - ta).max(min_w(ta));
+        for mult in [1.0, 2.0, 4.0] {
+            let tb2 = (ta + mult * w).min(t1);
+            let fb = eval_min(Interval::point(tb2), st);
+            if fb.hi < 0.0 {
+                st.blocks_included += 1;
+                include_block(tr, tile, b, ta, tb2, live, st);
+                return;
+            }
+            if tb2 >= t1 {
+                break;
+            }
+        }
+    }
+    st.blocks_undecided += 1;
+    // Objects positive over the whole remaining beam are dropped below.
+    let rest = tr.cam.hull(xs, ys, Interval::new(ta, t1));
+    let sub_live: Vec<u32> = live
+        .iter()
+        .copied()
+        .filter(|&k| {
+            let v = tr.interval(k as usize, rest, st);
+            !(v.is_empty() || v.lo > 0.0)
+        })
+        .collect();
+    let mx = (b.x0 + b.x1).div_ceil(2);
+    let my = (b.y0 + b.y1).div_ceil(2);
+    for (x0, x1) in [(b.x0, mx), (mx, b.x1)] {
+        for (y0, y1) in [(b.y0, my), (my, b.y1)] {
+            if x0 < x1 && y0 < y1 {
+                block(tr, tile, Block { x0, y0, x1, y1 }, ta, &sub_live, st);
+            }
+        }
+    }
+}
+
+// Every ray of the block has its first root in [ta, tb]: refine per pixel.
+fn include_block(
+    tr: &Tracer<'_>,
+    tile: &mut TileRays,
+    b: Block,
+    ta: f64,
+    tb: f64,
+    live: &[u32],
+    st: &mut RenderStats,
+) {
+    for j in b.y0..b.y1 {
+        for i in b.x0..b.x1 {
+            let k = tile.idx(i, j);
+            let ray = tile.rays[k];
+            tile.class[k] = Class::Included;
+            let Some((pt0, pt1)) = tile.slabs[k] else {
+                tile.hits[k] = None;
+                continue;
+            };
+            st.pixels_refined += 1;
+            let hit = refine(tr, &ray, live, ta, tb, st);
+            tile.hits[k] = match hit {
+                Some(h) if h.t >= pt0 && h.t <= pt1 => Some(h),
+                // The root lies outside this pixel's own clip range (only
+                // at the bounds' edges), or rounding hid the bracket's sign
+                // change: this pixel gets a full ray.
+                _ => {
+                    tile.class[k] = Class::Ray;
+                    trace_ray(tr, &ray, pt0, pt1, live, st)
+                }
+            };
+        }
+    }
+    tile.included.push((b.x0, b.y0, b.x1, b.y1));
+}
+
+fn set_block(tile: &mut TileRays, b: Block, c: Class) {
+    for j in b.y0..b.y1 {
+        for i in b.x0..b.x1 {
+            let k = tile.idx(i, j);
+            tile.hits[k] = None;
+            tile.class[k] = c;
+        }
+    }
+}

@@ -1,0 +1,326 @@
+//! One ray: guaranteed first-root isolation, bracketed refinement, and the
+//! fixed-step point march baseline.
+//!
+//! # First-root policy
+//! The ray's range [t0, t1] is bisected front to back. A piece is dropped
+//! when every live object's interval over the piece's box is strictly
+//! positive (or empty: f undefined there). Where one object alone may
+//! vanish on a piece, interval Newton (dF/dt = ∇F·d from `interval_grad`)
+//! shrinks the piece or drops it, and a piece on which that object is
+//! proven monotone with proven opposite signs at its ends holds exactly one
+//! root, which is refined on the point evaluator (Illinois). A piece
+//! narrower than the depth tolerance on which 0 ∈ F counts as a hit even
+//! without a sign change: this is how tangential contacts and double roots
+//! (f = g², which never changes sign) are drawn, at the cost of surfaces
+//! within about a tolerance of a ray being drawn as touched. A ray whose
+//! start point has f < 0 (point evaluation) hits at t0: cut-away views of
+//! solids clipped by the bounds, and filled masks for 2D functions.
+
+use super::camera::{PixelRay, ray_box};
+use super::{Hit, Tracer};
+use crate::interval::Interval;
+use crate::render::stats::RenderStats;
+
+// Caps that keep a pathological function from stalling a render; reaching
+// one counts as a hit at the current piece (never a silent miss).
+const MAX_RAY_STEPS: usize = 20_000;
+const MAX_REFINE_STEPS: usize = 200;
+
+/// The smallest live-object value at `p` and the object attaining it.
+pub(crate) fn scene_point(
+    tr: &Tracer<'_>,
+    live: &[u32],
+    p: [f64; 3],
+    st: &mut RenderStats,
+) -> (f64, usize) {
+    let mut best = (f64::INFINITY, live.first().copied().unwrap_or(0) as usize);
+    for &k in live {
+        let v = tr.point(k as usize, p, st);
+        if v < best.0 {
+            best = (v, k as usize);
+        }
+    }
+    best
+}
+
+/// Finds a root of `f` in [a, b] with `f(a) > 0 >= f(b)` to within `tol`
+/// (Illinois false position, with a bisection step every fourth iteration
+/// so the bracket always shrinks).
+pub(crate) fn illinois(
+    mut f: impl FnMut(f64) -> f64,
+    mut a: f64,
+    mut b: f64,
+    mut fa: f64,
+    mut fb: f64,
+    tol: f64,
+) -> f64 {
+    let mut side = 0i8;
+    for it in 0..MAX_REFINE_STEPS {
+        if b - a <= tol {
+            break;
+        }
+        let mut c = if it % 4 == 3 || !(fa - fb).is_finite() || fa == fb {
+            0.5 * (a + b)
+        } else {
+            b - fb * (b - a) / (fb - fa)
+        };
+        if !(c > a && c < b) {
+            c = 0.5 * (a + b);
+        }
+        let fc = f(c);
+        if fc.is_nan() {
+            // Undefined inside the bracket: shrink towards the front end.
+            b = c;
+            continue;
+        }
+        if fc > 0.0 {
+            a = c;
+            fa = fc;
+            if side == 1 {
+                fb *= 0.5;
+            }
+            side = 1;
+        } else {
+            b = c;
+            fb = fc;
+            if side == -1 {
+                fa *= 0.5;
+            }
+            side = -1;
+        }
+    }
+    0.5 * (a + b)
+}
+
+/// Refines the first root of the scene function on the pixel's ray in the
+/// bracket [a, b] (f(a) > 0 ≥ f(b) expected), returning the hit.
+pub(crate) fn refine(
+    tr: &Tracer<'_>,
+    ray: &PixelRay,
+    live: &[u32],
+    a: f64,
+    b: f64,
+    st: &mut RenderStats,
+) -> Option<Hit> {
+    let fa = scene_point(tr, live, ray.at(a), st).0;
+    let fb = scene_point(tr, live, ray.at(b), st).0;
+    if !(fa > 0.0 && fb <= 0.0) {
+        return None;
+    }
+    let tol = tr.cam.tolerance(a);
+    let mut evals = 0u64;
+    let t = illinois(
+        |t| {
+            evals += live.len() as u64;
+            let p = ray.at(t);
+            live.iter()
+                .map(|&k| tr.evals[k as usize].point(p))
+                .fold(f64::INFINITY, f64::min)
+        },
+        a,
+        b,
+        fa,
+        fb,
+        tol,
+    );
+    st.point_evals += evals;
+    let obj = scene_point(tr, live, ray.at(t), st).1;
+    Some(Hit {
+        t,
+        obj,
+        inside: false,
+    })
+}
+
+/// Point test of the start: a ray that begins inside a solid hits at t0.
+pub(crate) fn starts_inside(
+    tr: &Tracer<'_>,
+    ray: &PixelRay,
+    live: &[u32],
+    t0: f64,
+    st: &mut RenderStats,
+) -> Option<Hit> {
+    let (v, obj) = scene_point(tr, live, ray.at(t0), st);
+    (v < 0.0).then_some(Hit {
+        t: t0,
+        obj,
+        inside: true,
+    })
+}
+
+/// Guaranteed first-root isolation on one ray over [t0, t1] (policy in
+/// the module doc).
+pub(crate) fn trace_ray(
+    tr: &Tracer<'_>,
+    ray: &PixelRay,
+    t0: f64,
+    t1: f64,
+    live: &[u32],
+    st: &mut RenderStats,
+) -> Option<Hit> {
+    st.rays += 1;
+    if live.is_empty() {
+        return None;
+    }
+    if let Some(h) = starts_inside(tr, ray, live, t0, st) {
+        return Some(h);
+    }
+    let mut stack: Vec<(f64, f64)> = vec![(t0, t1)];
+    let mut cand: Vec<(u32, Interval)> = Vec::with_capacity(live.len());
+    let mut steps = 0usize;
+    while let Some((a, b)) = stack.pop() {
+        steps += 1;
+        let bx = ray_box(ray.o, ray.d, Interval::new(a, b));
+        cand.clear();
+        for &k in live {
+            let f = tr.interval(k as usize, bx, st);
+            if !f.is_empty() && f.lo <= 0.0 {
+                cand.push((k, f));
+            }
+        }
+        if cand.is_empty() {
+            continue;
+        }
+        let tol = tr.cam.tolerance(a);
+        if b - a <= tol || steps >= MAX_RAY_STEPS {
+            return Some(narrow_hit(tr, ray, live, a, b, st));
+        }
+        if cand.len() == 1 {
+            let k = cand[0].0 as usize;
+            match newton(tr, ray, k, a, b, st) {
+                Newton::Empty => continue,
+                Newton::Unique(na, nb) => {
+                    if let Some(h) = refine(tr, ray, live, na, nb, st) {
+                        return Some(h);
+                    }
+                    // Point signs disagree with the proof at the limits of
+                    // precision: treat as a narrow piece.
+                    return Some(narrow_hit(tr, ray, live, na, nb, st));
+                }
+                Newton::Shrunk(na, nb) if nb - na < 0.5 * (b - a) => {
+                    stack.push((na, nb));
+                    continue;
+                }
+                Newton::Shrunk(na, nb) => {
+                    let m = 0.5 * (na + nb);
+                    stack.push((m, nb));
+                    stack.push((na, m));
+                    continue;
+                }
+            }
+        }
+        let m = 0.5 * (a + b);
+        stack.push((m, b));
+        stack.push((a, m));
+    }
+    None
+}
+
+// A narrow piece with 0 ∈ F: refine a sign change if the ends show one,
+// else the front of the piece is the hit (tangency policy).
+fn narrow_hit(
+    tr: &Tracer<'_>,
+    ray: &PixelRay,
+    live: &[u32],
+    a: f64,
+    b: f64,
+    st: &mut RenderStats,
+) -> Hit {
+    if let Some(h) = refine(tr, ray, live, a, b, st) {
+        return h;
+    }
+    let obj = scene_point(tr, live, ray.at(a), st).1;
+    Hit {
+        t: a,
+        obj,
+        inside: false,
+    }
+}
+
+enum Newton {
+    /// No root of the object in the piece.
+    Empty,
+    /// Exactly one root, in this bracket (proven signs, monotone).
+    Unique(f64, f64),
+    /// The roots, if any, lie in this sub-piece.
+    Shrunk(f64, f64),
+}
+
+// One interval Newton step for object k on [a, b].
+fn newton(
+    tr: &Tracer<'_>,
+    ray: &PixelRay,
+    k: usize,
+    a: f64,
+    b: f64,
+    st: &mut RenderStats,
+) -> Newton {
+    let bx = ray_box(ray.o, ray.d, Interval::new(a, b));
+    let g = tr.interval_grad(k, bx, st);
+    let mut dfdt = Interval::point(0.0);
+    for i in 0..3 {
+        dfdt = dfdt.add(g.d[i].mul(ray.d[i]));
+    }
+    if dfdt.is_empty() || dfdt.contains(0.0) || !dfdt.lo.is_finite() || !dfdt.hi.is_finite() {
+        return Newton::Shrunk(a, b);
+    }
+    let m = 0.5 * (a + b);
+    let fm = tr.interval(k, ray_box(ray.o, ray.d, Interval::point(m)), st);
+    if fm.is_empty() {
+        return Newton::Shrunk(a, b);
+    }
+    let n = Interval::point(m).sub(fm.div(dfdt));
+    let (na, nb) = (a.max(n.lo), b.min(n.hi));
+    if !(na <= nb) {
+        return Newton::Empty;
+    }
+    let fa = tr.interval(k, ray_box(ray.o, ray.d, Interval::point(na)), st);
+    let fb = tr.interval(k, ray_box(ray.o, ray.d, Interval::point(nb)), st);
+    if fa.lo > 0.0 && fb.lo > 0.0 || fa.hi < 0.0 && fb.hi < 0.0 {
+        // Monotone with one strict sign at both ends: no root. (A negative
+        // start cannot follow rejected pieces except at the ray start,
+        // which `starts_inside` handled.)
+        return Newton::Empty;
+    }
+    if fa.lo > 0.0 && fb.hi < 0.0 {
+        return Newton::Unique(na, nb);
+    }
+    Newton::Shrunk(na, nb)
+}
+
+/// The baseline: `steps` equal steps of point evaluation over [t0, t1];
+/// the first sign change is refined by Illinois.
+pub(crate) fn march(
+    tr: &Tracer<'_>,
+    ray: &PixelRay,
+    t0: f64,
+    t1: f64,
+    live: &[u32],
+    steps: u32,
+    st: &mut RenderStats,
+) -> Option<Hit> {
+    st.rays += 1;
+    if let Some(h) = starts_inside(tr, ray, live, t0, st) {
+        return Some(h);
+    }
+    let n = steps.max(1);
+    let mut prev_t = t0;
+    for i in 1..=n {
+        let t = if i == n {
+            t1
+        } else {
+            t0 + (t1 - t0) * f64::from(i) / f64::from(n)
+        };
+        let (v, _) = scene_point(tr, live, ray.at(t), st);
+        if v <= 0.0 {
+            let obj = scene_point(tr, live, ray.at(t), st).1;
+            return refine(tr, ray, live, prev_t, t, st).or(Some(Hit {
+                t,
+                obj,
+                inside: false,
+            }));
+        }
+        prev_t = t;
+    }
+    None
+}

@@ -1,0 +1,268 @@
+//! Shading (Lambert + Blinn-Phong + ambient, linear light) and guaranteed
+//! shadows.
+//!
+//! # Shadows
+//! A point is lit by a shadow-casting light only if the segment from it to
+//! the light is proven free of surface. The segment starts at
+//! `q = p + ε·n` (n the outward unit gradient) with
+//! `ε = max(1e-4 · bounds diagonal, 2 · depth tolerance · |d|)`, so `q` is
+//! off the surface even with the depth error of the hit. The segment (for a
+//! directional light: up to twice the bounds diagonal, then clipped to the
+//! bounds, outside which there is no surface) is bisected; a piece is free
+//! when every object's interval over it (clipped to the bounds) is strictly
+//! positive, or, for the piece that starts at q, when every object that may
+//! vanish there is proven increasing along the segment (interval gradient
+//! · segment direction > 0) and positive at q. A piece shorter than ε/2
+//! that is not free, or an exhausted budget, means shadow.
+//!
+//! For an included block, one shadow beam first tests all its hit points
+//! at once: the box Q of their q points replaces the single point, and the
+//! same test over `Q + s·(L − Q)` proves the whole block lit (counted in
+//! `shadow_rays_saved`); only if it fails does each pixel test its own
+//! segment. Lights with `shadows: false` run no shadow code.
+
+use super::Tracer;
+use super::camera::{IBox, add, bounds_box, box_hull, box_meet, dot, normalize, point_box, scale, sub};
+use crate::interval::Interval;
+use crate::render::stats::RenderStats;
+use crate::scene::LightKind;
+
+/// Ambient light, as a fraction of the object colour.
+pub const AMBIENT: f64 = 0.1;
+/// Specular strength (white highlights).
+pub const SPECULAR: f64 = 0.25;
+/// Blinn-Phong exponent.
+pub const SHININESS: i32 = 32;
+
+const MAX_SHADOW_PIECES: usize = 4000;
+
+/// The far end of a shadow segment.
+#[derive(Copy, Clone, Debug)]
+pub(crate) enum SegEnd {
+    /// A point light's position.
+    Point([f64; 3]),
+    /// A fixed offset from the start (directional light).
+    Offset([f64; 3]),
+}
+
+/// The unit direction from `p` towards the light, and the segment end.
+pub(crate) fn light_dir(tr: &Tracer<'_>, kind: LightKind, p: [f64; 3]) -> Option<([f64; 3], SegEnd)> {
+    match kind {
+        LightKind::Point(l) => {
+            let d = normalize(sub(l, p))?;
+            Some((d, SegEnd::Point(l)))
+        }
+        LightKind::Directional(dir) => {
+            let d = normalize(scale(dir, -1.0))?;
+            Some((d, SegEnd::Offset(scale(d, 2.0 * tr.diag))))
+        }
+    }
+}
+
+/// Whether every segment from a point of `q` to `end` is proven free of
+/// surface; `start_ok` says every start point was proven outside all
+/// objects (enables the monotonicity test on the first piece).
+pub(crate) fn segment_free(
+    tr: &Tracer<'_>,
+    q: IBox,
+    end: SegEnd,
+    start_ok: bool,
+    min_w: f64,
+    st: &mut RenderStats,
+) -> bool {
+    let delta: IBox = match end {
+        SegEnd::Point(l) => std::array::from_fn(|i| Interval::point(l[i]).sub(q[i])),
+        SegEnd::Offset(o) => point_box(o),
+    };
+    let len = delta
+        .iter()
+        .map(|c| c.lo.abs().max(c.hi.abs()))
+        .map(|m| m * m)
+        .sum::<f64>()
+        .sqrt();
+    let bounds = bounds_box(&tr.bounds);
+    let n = tr.evals.len();
+    let mut stack = vec![(0.0f64, 1.0f64)];
+    let mut pieces = 0usize;
+    while let Some((a, c)) = stack.pop() {
+        pieces += 1;
+        if pieces > MAX_SHADOW_PIECES {
+            return false;
+        }
+        let s = Interval::new(a, c);
+        let bx: IBox = std::array::from_fn(|i| q[i].add(s.mul(delta[i])));
+        let Some(clip) = box_meet(bx, bounds) else {
+            continue;
+        };
+        let mut free = true;
+        let mut maybe: Vec<usize> = Vec::new();
+        for k in 0..n {
+            let f = tr.interval(k, clip, st);
+            if !(f.is_empty() || f.lo > 0.0) {
+                free = false;
+                maybe.push(k);
+            }
+        }
+        if free {
+            continue;
+        }
+        if a == 0.0 && start_ok {
+            let increasing = maybe.iter().all(|&k| {
+                let g = tr.interval_grad(k, bx, st);
+                let mut dd = Interval::point(0.0);
+                for i in 0..3 {
+                    dd = dd.add(g.d[i].mul(delta[i]));
+                }
+                dd.lo > 0.0
+            });
+            if increasing {
+                continue;
+            }
+        }
+        if (c - a) * len <= min_w {
+            return false;
+        }
+        let m = 0.5 * (a + c);
+        stack.push((m, c));
+        stack.push((a, m));
+    }
+    true
+}
+
+/// Whether the point q is proven outside every object (Some(true)),
+/// proven inside one (Some(false)), or undecided (None).
+pub(crate) fn start_state(tr: &Tracer<'_>, q: [f64; 3], st: &mut RenderStats) -> Option<bool> {
+    let b = point_box(q);
+    let mut all_pos = true;
+    for k in 0..tr.evals.len() {
+        let f = tr.interval(k, b, st);
+        if f.hi < 0.0 {
+            return Some(false);
+        }
+        if !(f.is_empty() || f.lo > 0.0) {
+            all_pos = false;
+        }
+    }
+    all_pos.then_some(true)
+}
+
+/// The geometry of one hit pixel, ready for shading.
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct Surf {
+    /// Hit point.
+    pub p: [f64; 3],
+    /// Unit normal facing the viewer.
+    pub n: [f64; 3],
+    /// Shadow segment start.
+    pub q: [f64; 3],
+    /// Unit vector towards the eye.
+    pub v: [f64; 3],
+    /// Shadow segment resolution (world units).
+    pub min_w: f64,
+    /// Object colour.
+    pub color: [f64; 3],
+}
+
+/// Surface geometry at a hit (normal from the point gradient).
+pub(crate) fn surface(
+    tr: &Tracer<'_>,
+    ray: &super::camera::PixelRay,
+    hit: &super::Hit,
+    st: &mut RenderStats,
+) -> Surf {
+    let p = ray.at(hit.t);
+    let dn = normalize(ray.dm).unwrap_or([0.0, 0.0, 1.0]);
+    let v = scale(dn, -1.0);
+    let dlen = super::camera::norm(ray.dm);
+    let eps = (1e-4 * tr.diag).max(2.0 * tr.cam.tolerance(hit.t) * dlen);
+    let color = tr.colors[hit.obj];
+    if hit.inside {
+        // A cut face at the bounds: face the viewer, start shadows in front.
+        return Surf {
+            p,
+            n: v,
+            q: add(p, scale(v, eps)),
+            v,
+            min_w: 0.5 * eps,
+            color,
+        };
+    }
+    st.point_evals += 1;
+    let g = tr.evals[hit.obj].point_grad(p);
+    let nout = normalize(g.d).unwrap_or(v);
+    let n = if dot(nout, v) < 0.0 {
+        scale(nout, -1.0)
+    } else {
+        nout
+    };
+    Surf {
+        p,
+        n,
+        q: add(p, scale(nout, eps)),
+        v,
+        min_w: 0.5 * eps,
+        color,
+    }
+}
+
+/// Tests one shadow beam for a set of surface points and one light.
+pub(crate) fn shadow_beam(
+    tr: &Tracer<'_>,
+    surfs: &[Surf],
+    kind: LightKind,
+    st: &mut RenderStats,
+) -> bool {
+    let Some(first) = surfs.first() else {
+        return false;
+    };
+    let Some((_, end)) = light_dir(tr, kind, first.p) else {
+        return false;
+    };
+    let mut qb = point_box(first.q);
+    let mut start_ok = true;
+    let mut min_w = f64::INFINITY;
+    for s in surfs {
+        qb = box_hull(qb, point_box(s.q));
+        min_w = min_w.min(s.min_w);
+        if start_ok && start_state(tr, s.q, st) != Some(true) {
+            start_ok = false;
+        }
+    }
+    segment_free(tr, qb, end, start_ok, min_w, st)
+}
+
+/// Shades one surface point; `lit_by_beam[l]` says a shadow beam already
+/// proved light l visible.
+pub(crate) fn shade(
+    tr: &Tracer<'_>,
+    s: &Surf,
+    lit_by_beam: &[bool],
+    st: &mut RenderStats,
+) -> [f64; 3] {
+    let mut c = scale(s.color, AMBIENT);
+    for (li, light) in tr.lights.iter().enumerate() {
+        let Some((l, end)) = light_dir(tr, light.kind, s.p) else {
+            continue;
+        };
+        let ndl = dot(s.n, l);
+        if ndl <= 0.0 {
+            continue;
+        }
+        if light.shadows && !lit_by_beam.get(li).copied().unwrap_or(false) {
+            st.shadow_rays += 1;
+            let free = match start_state(tr, s.q, st) {
+                Some(false) => false,
+                state => segment_free(tr, point_box(s.q), end, state == Some(true), s.min_w, st),
+            };
+            if !free {
+                continue;
+            }
+        }
+        let h = normalize(add(l, s.v)).unwrap_or(s.n);
+        let spec = SPECULAR * crate::interval::powi_point(dot(s.n, h).max(0.0), SHININESS);
+        for ch in 0..3 {
+            c[ch] += light.color[ch] * (s.color[ch] * ndl + spec);
+        }
+    }
+    c
+}
