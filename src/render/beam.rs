@@ -106,26 +106,25 @@ fn block(
         let k = tile.idx(b.x0, b.y0);
         let (pt0, pt1) = tile.slabs[k].unwrap_or((t0, t1));
         let ray = tile.rays[k];
-        tile.hits[k] = trace_ray(tr, &ray, pt0.max(t_floor), pt1, live, st);
+        // The ray starts at its own clip start, not at the block's rejected
+        // prefix: the bisection pieces, and so the tangency decisions of
+        // the first-root policy, are then those of `Method::Pixel`, and
+        // both methods draw the same pixels. Re-rejecting the prefix costs
+        // a few interval evaluations.
+        tile.hits[k] = trace_ray(tr, &ray, pt0, pt1, live, st);
         tile.class[k] = Class::Ray;
         return;
     }
     // Screen extents of the pixel centres.
-    let xs = (
-        (b.x0 + tile.x0) as f64 + 0.5,
-        (b.x1 + tile.x0) as f64 - 0.5,
-    );
-    let ys = (
-        (b.y0 + tile.y0) as f64 + 0.5,
-        (b.y1 + tile.y0) as f64 - 0.5,
-    );
+    let xs = ((b.x0 + tile.x0) as f64 + 0.5, (b.x1 + tile.x0) as f64 - 0.5);
+    let ys = ((b.y0 + tile.y0) as f64 + 0.5, (b.y1 + tile.y0) as f64 - 0.5);
     let side = f64::from((b.x1 - b.x0).max(b.y1 - b.y0));
     let min_w = |t: f64| side * tr.cam.spacing(t).max(1e-9);
     let eval_min = |t: Interval, st: &mut RenderStats| -> Interval {
         let hb = tr.cam.hull(xs, ys, t);
         let mut f = Interval::point(f64::INFINITY);
         for &k in live {
-            let v = tr.interval(k as usize, hb, st);
+            let v = tr.interval_tight(k as usize, hb, st);
             if v.is_empty() {
                 continue;
             }

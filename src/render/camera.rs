@@ -35,10 +35,16 @@ impl std::fmt::Display for CameraError {
         match self {
             CameraError::EyeIsTarget => write!(f, "camera eye equals target (no view direction)"),
             CameraError::UpParallel => {
-                write!(f, "camera up vector is zero or parallel to the view direction")
+                write!(
+                    f,
+                    "camera up vector is zero or parallel to the view direction"
+                )
             }
             CameraError::BadProjection => {
-                write!(f, "camera fov must be in (0, 180) degrees and width positive")
+                write!(
+                    f,
+                    "camera fov must be in (0, 180) degrees and width positive"
+                )
             }
             CameraError::ZeroSize => write!(f, "image size must be at least 1x1"),
         }
@@ -211,7 +217,10 @@ impl RayCamera {
                     .add(yi.mul(Interval::point(cy[i])))
             })
         };
-        (aff(self.o0, self.ox, self.oy), aff(self.d0, self.dx, self.dy))
+        (
+            aff(self.o0, self.ox, self.oy),
+            aff(self.d0, self.dx, self.dy),
+        )
     }
 
     /// Origin and direction of the ray through the centre of pixel (i, j),

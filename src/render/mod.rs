@@ -139,7 +139,10 @@ impl std::fmt::Display for RenderError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             RenderError::BadSize(w, h) => {
-                write!(f, "image size {w}x{h} is invalid (each side 1..={MAX_SIZE})")
+                write!(
+                    f,
+                    "image size {w}x{h} is invalid (each side 1..={MAX_SIZE})"
+                )
             }
             RenderError::NoObjects => write!(f, "the scene has no objects to render"),
             RenderError::EvaluatorCount {
@@ -193,6 +196,36 @@ impl Tracer<'_> {
     pub(crate) fn interval(&self, k: usize, b: IBox, st: &mut RenderStats) -> Interval {
         st.interval_evals += 1;
         self.evals[k].interval(b)
+    }
+    /// F over `b`, tightened where it straddles 0 by the mean-value form
+    /// `f(c) + ∇F(b)·(b − c)` (c the box centre), intersected with the
+    /// natural enclosure. Sound wherever the evaluator's gradient
+    /// enclosure covers the (generalised) gradient of f over the box; it is
+    /// used only when every gradient bound is finite, which rules out the
+    /// poles and domain edges where it would not.
+    pub(crate) fn interval_tight(&self, k: usize, b: IBox, st: &mut RenderStats) -> Interval {
+        let f = self.interval(k, b, st);
+        if f.is_empty() || f.lo > 0.0 || f.hi < 0.0 {
+            return f;
+        }
+        if !b.iter().all(|c| c.lo.is_finite() && c.hi.is_finite()) {
+            return f;
+        }
+        let c: [f64; 3] = b.map(|i| i.mid());
+        let g = self.interval_grad(k, b, st);
+        if !g.d.iter().all(|d| d.lo.is_finite() && d.hi.is_finite()) {
+            return f;
+        }
+        let fc = self.interval(k, camera::point_box(c), st);
+        if fc.is_empty() || !fc.lo.is_finite() || !fc.hi.is_finite() {
+            return f;
+        }
+        let mut mv = fc;
+        for i in 0..3 {
+            mv = mv.add(g.d[i].mul(b[i].sub(Interval::point(c[i]))));
+        }
+        let (lo, hi) = (f.lo.max(mv.lo), f.hi.min(mv.hi));
+        if lo <= hi { Interval::new(lo, hi) } else { f }
     }
     pub(crate) fn interval_grad(&self, k: usize, b: IBox, st: &mut RenderStats) -> IntervalGrad {
         st.interval_evals += 1;

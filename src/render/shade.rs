@@ -22,7 +22,9 @@
 //! segment. Lights with `shadows: false` run no shadow code.
 
 use super::Tracer;
-use super::camera::{IBox, add, bounds_box, box_hull, box_meet, dot, normalize, point_box, scale, sub};
+use super::camera::{
+    IBox, add, bounds_box, box_hull, box_meet, dot, normalize, point_box, scale, sub,
+};
 use crate::interval::Interval;
 use crate::render::stats::RenderStats;
 use crate::scene::LightKind;
@@ -46,7 +48,11 @@ pub(crate) enum SegEnd {
 }
 
 /// The unit direction from `p` towards the light, and the segment end.
-pub(crate) fn light_dir(tr: &Tracer<'_>, kind: LightKind, p: [f64; 3]) -> Option<([f64; 3], SegEnd)> {
+pub(crate) fn light_dir(
+    tr: &Tracer<'_>,
+    kind: LightKind,
+    p: [f64; 3],
+) -> Option<([f64; 3], SegEnd)> {
     match kind {
         LightKind::Point(l) => {
             let d = normalize(sub(l, p))?;
