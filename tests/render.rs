@@ -36,11 +36,10 @@ impl Evaluator for Sphere {
         }
     }
     fn interval(&self, b: [Interval; 3]) -> Interval {
-        let mut s = pt(0.0);
-        for i in 0..3 {
-            s = s.add(b[i].sub(pt(self.c[i])).square());
-        }
-        s.sub(pt(self.r2))
+        b.iter()
+            .zip(self.c)
+            .fold(pt(0.0), |s, (bi, ci)| s.add(bi.sub(pt(ci)).square()))
+            .sub(pt(self.r2))
     }
     fn interval_grad(&self, b: [Interval; 3]) -> IntervalGrad {
         IntervalGrad {

@@ -95,7 +95,7 @@ fn block(
     }
     let single = b.x1 - b.x0 == 1 && b.y1 - b.y0 == 1;
     t0 = t0.max(t_floor);
-    if !(t0 <= t1) || live.is_empty() {
+    if t0.partial_cmp(&t1).is_none_or(|o| o.is_gt()) || live.is_empty() {
         if !single {
             st.blocks_rejected += 1;
         }

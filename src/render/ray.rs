@@ -271,7 +271,7 @@ fn newton(
     }
     let n = Interval::point(m).sub(fm.div(dfdt));
     let (na, nb) = (a.max(n.lo), b.min(n.hi));
-    if !(na <= nb) {
+    if na.partial_cmp(&nb).is_none_or(|o| o.is_gt()) {
         return Newton::Empty;
     }
     let fa = tr.interval(k, ray_box(ray.o, ray.d, Interval::point(na)), st);

@@ -115,10 +115,10 @@ pub(crate) fn segment_free(
         if a == 0.0 && start_ok {
             let increasing = maybe.iter().all(|&k| {
                 let g = tr.interval_grad(k, bx, st);
-                let mut dd = Interval::point(0.0);
-                for i in 0..3 {
-                    dd = dd.add(g.d[i].mul(delta[i]));
-                }
+                let dd =
+                    g.d.iter()
+                        .zip(&delta)
+                        .fold(Interval::point(0.0), |acc, (gi, di)| acc.add(gi.mul(*di)));
                 dd.lo > 0.0
             });
             if increasing {
@@ -266,8 +266,8 @@ pub(crate) fn shade(
         }
         let h = normalize(add(l, s.v)).unwrap_or(s.n);
         let spec = SPECULAR * crate::interval::powi_point(dot(s.n, h).max(0.0), SHININESS);
-        for ch in 0..3 {
-            c[ch] += light.color[ch] * (s.color[ch] * ndl + spec);
+        for (ch, out) in c.iter_mut().enumerate() {
+            *out += light.color[ch] * (s.color[ch] * ndl + spec);
         }
     }
     c
