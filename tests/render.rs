@@ -537,6 +537,9 @@ fn a_2d_function_renders_as_a_filled_mask() {
             }
         }
     }
+    // Whole blocks inside the disc are settled at once.
+    assert!(out.stats.blocks_included > 0);
+    assert!(out.stats.rays < 400, "{}", out.stats.rays);
 }
 
 #[test]

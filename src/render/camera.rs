@@ -238,20 +238,18 @@ impl RayCamera {
     /// A sound hull of every ray point with screen x ∈ `xs`, y ∈ `ys`
     /// and parameter t ∈ `t` (from the 8 corners, see the module doc).
     pub fn hull(&self, xs: (f64, f64), ys: (f64, f64), t: Interval) -> IBox {
-        let mut out: Option<IBox> = None;
-        for x in [xs.0, xs.1] {
-            for y in [ys.0, ys.1] {
-                let (o, d) = self.ray_at(x, y);
-                for tc in [t.lo, t.hi] {
-                    let b = ray_box(o, d, Interval::point(tc));
-                    out = Some(match out {
-                        None => b,
-                        Some(h) => box_hull(h, b),
-                    });
-                }
-            }
-        }
-        out.unwrap_or([Interval::EMPTY; 3])
+        self.corners(xs, ys).hull(t)
+    }
+
+    /// The corner rays of the screen rectangle `xs × ys`, for repeated
+    /// hulls over different T.
+    pub fn corners(&self, xs: (f64, f64), ys: (f64, f64)) -> CornerRays {
+        CornerRays([
+            self.ray_at(xs.0, ys.0),
+            self.ray_at(xs.1, ys.0),
+            self.ray_at(xs.0, ys.1),
+            self.ray_at(xs.1, ys.1),
+        ])
     }
 
     /// Distance between neighbouring pixel rays at parameter t, world units.
@@ -264,6 +262,23 @@ impl RayCamera {
     /// `tolerance · |d|`), never below a tiny absolute floor.
     pub fn tolerance(&self, t: f64) -> f64 {
         (0.25 * self.spacing(t)).max(1e-9)
+    }
+}
+
+/// Enclosures of the origin and direction of a block's four corner rays.
+#[derive(Copy, Clone, Debug)]
+pub struct CornerRays(pub [(IBox, IBox); 4]);
+
+impl CornerRays {
+    /// A sound hull of the block's ray points for t ∈ `t`.
+    pub fn hull(&self, t: Interval) -> IBox {
+        let mut out = ray_box(self.0[0].0, self.0[0].1, Interval::point(t.lo));
+        for (o, d) in &self.0 {
+            for tc in [t.lo, t.hi] {
+                out = box_hull(out, ray_box(*o, *d, Interval::point(tc)));
+            }
+        }
+        out
     }
 }
 

@@ -234,7 +234,10 @@ pub(crate) fn shadow_beam(
             start_ok = false;
         }
     }
-    segment_free(tr, qb, end, start_ok, min_w, st)
+    // A beam cannot be resolved much below its own cross-section: give up
+    // (and fall back to per-pixel segments) once pieces get that short.
+    let diam = qb.iter().map(|c| c.width() * c.width()).sum::<f64>().sqrt();
+    segment_free(tr, qb, end, start_ok, min_w.max(diam), st)
 }
 
 /// Shades one surface point; `lit_by_beam[l]` says a shadow beam already
