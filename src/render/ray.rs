@@ -324,3 +324,132 @@ pub(crate) fn march(
     }
     None
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::eval::{Evaluator, Grad, IntervalGrad};
+    use crate::render::camera::{RayCamera, point_box};
+    use crate::scene::{Bounds, Camera};
+    use std::sync::Arc;
+
+    /// A function of x alone, with its interval extension and derivative.
+    struct OfX {
+        f: fn(f64) -> f64,
+        df: fn(f64) -> f64,
+        fi: fn(Interval) -> Interval,
+        dfi: fn(Interval) -> Interval,
+    }
+
+    impl Evaluator for OfX {
+        fn point(&self, p: [f64; 3]) -> f64 {
+            (self.f)(p[0])
+        }
+        fn point_grad(&self, p: [f64; 3]) -> Grad {
+            Grad {
+                v: (self.f)(p[0]),
+                d: [(self.df)(p[0]), 0.0, 0.0],
+            }
+        }
+        fn interval(&self, b: [Interval; 3]) -> Interval {
+            (self.fi)(b[0])
+        }
+        fn interval_grad(&self, b: [Interval; 3]) -> IntervalGrad {
+            let z = Interval::point(0.0);
+            IntervalGrad {
+                v: (self.fi)(b[0]),
+                d: [(self.dfi)(b[0]), z, z],
+            }
+        }
+    }
+
+    // Traces the ray x = -2 + t (t in [0, 4]) through `e`.
+    fn trace(e: OfX) -> (Option<Hit>, RenderStats, f64) {
+        let evals: Vec<Arc<dyn Evaluator>> = vec![Arc::new(e)];
+        let tr = Tracer {
+            cam: RayCamera::new(&Camera::default(), 64, 64).unwrap(),
+            evals: &evals,
+            colors: vec![[1.0; 3]],
+            lights: &[],
+            bounds: Bounds::default(),
+            diag: 7.0,
+        };
+        let (o, d) = ([-2.0, 0.0, 0.0], [1.0, 0.0, 0.0]);
+        let ray = PixelRay {
+            o: point_box(o),
+            d: point_box(d),
+            om: o,
+            dm: d,
+        };
+        let mut st = RenderStats::default();
+        let hit = trace_ray(&tr, &ray, 0.0, 4.0, &[0], &mut st);
+        (hit, st, tr.cam.tolerance(2.5))
+    }
+
+    fn h(v: f64) -> Interval {
+        Interval::point(v)
+    }
+
+    #[test]
+    fn illinois_converges_within_tolerance() {
+        let t = illinois(|t| 2.0 - t * t, 0.0, 2.0, 2.0, -2.0, 1e-10);
+        assert!((t - 2f64.sqrt()).abs() <= 1e-10);
+    }
+
+    #[test]
+    fn a_simple_root_is_proven_by_newton_quickly() {
+        let (hit, st, tol) = trace(OfX {
+            f: |x| 0.5 - x,
+            df: |_| -1.0,
+            fi: |x| h(0.5).sub(x),
+            dfi: |_| h(-1.0),
+        });
+        let hit = hit.unwrap();
+        assert!(!hit.inside);
+        assert!((hit.t - 2.5).abs() <= tol);
+        assert!(st.interval_evals < 20, "{}", st.interval_evals);
+    }
+
+    #[test]
+    fn a_double_root_counts_as_a_hit_at_the_tangency() {
+        // (x - 0.5)² touches 0 at x = 0.5 and never changes sign.
+        let (hit, _, tol) = trace(OfX {
+            f: |x| (x - 0.5) * (x - 0.5),
+            df: |x| 2.0 * (x - 0.5),
+            fi: |x| x.sub(h(0.5)).square(),
+            dfi: |x| h(2.0).mul(x.sub(h(0.5))),
+        });
+        let hit = hit.unwrap();
+        assert!((hit.t - 2.5).abs() <= tol, "{} vs 2.5 ± {tol}", hit.t);
+    }
+
+    #[test]
+    fn a_positive_function_has_no_hit() {
+        let (hit, st, _) = trace(OfX {
+            f: |x| x * x + 0.01,
+            df: |x| 2.0 * x,
+            fi: |x| x.square().add(h(0.01)),
+            dfi: |x| h(2.0).mul(x),
+        });
+        assert_eq!(hit, None);
+        assert_eq!(st.rays, 1);
+    }
+
+    #[test]
+    fn a_ray_starting_inside_hits_at_its_start() {
+        let (hit, _, _) = trace(OfX {
+            f: |x| x - 5.0,
+            df: |_| 1.0,
+            fi: |x| x.sub(h(5.0)),
+            dfi: |_| h(1.0),
+        });
+        assert_eq!(
+            hit,
+            Some(Hit {
+                t: 0.0,
+                obj: 0,
+                inside: true
+            })
+        );
+    }
+}
