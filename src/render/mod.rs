@@ -248,9 +248,10 @@ struct TileOut {
     w: u32,
     h: u32,
     color: Vec<Rgb<u8>>,
-    hits: Vec<Option<Hit>>,
-    normals: Vec<Option<[f64; 3]>>,
-    class: Vec<Class>,
+    // Kept compact: a full-size render holds every tile at once.
+    depth: Vec<f64>,
+    normals: Option<Vec<Rgb<u8>>>,
+    class: Option<Vec<Rgb<u8>>>,
     stats: RenderStats,
 }
 
@@ -304,7 +305,7 @@ pub fn render(
         tiles
             .par_iter()
             .map(|&(x0, y0, tw, th)| {
-                let out = render_tile(&tr, opts.method, x0, y0, tw, th, background);
+                let out = render_tile(&tr, opts, x0, y0, tw, th, background);
                 let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                 if opts.progress {
                     eprint!("\rrendering: {n}/{n_tiles} tiles");
@@ -326,8 +327,8 @@ pub fn render(
     let mut color = vec![background; npx];
     let mut hit_mask = vec![false; npx];
     let mut depth_t = vec![f64::INFINITY; npx];
-    let mut normals = vec![None; npx];
-    let mut class = vec![Class::Outside; npx];
+    let mut normals = opts.want_normals.then(|| vec![Rgb([0u8; 3]); npx]);
+    let mut class = opts.want_classify.then(|| vec![Rgb([0u8; 3]); npx]);
     for t in &outs {
         stats.merge(&t.stats);
         for j in 0..t.h {
@@ -335,34 +336,22 @@ pub fn render(
                 let src = (j * t.w + i) as usize;
                 let dst = ((t.y0 + j) as usize) * (w as usize) + (t.x0 + i) as usize;
                 color[dst] = t.color[src];
-                if let Some(hit) = t.hits[src] {
-                    hit_mask[dst] = true;
-                    depth_t[dst] = hit.t;
+                depth_t[dst] = t.depth[src];
+                hit_mask[dst] = t.depth[src].is_finite();
+                if let (Some(n), Some(tn)) = (normals.as_mut(), t.normals.as_ref()) {
+                    n[dst] = tn[src];
                 }
-                normals[dst] = t.normals[src];
-                class[dst] = t.class[src];
+                if let (Some(c), Some(tc)) = (class.as_mut(), t.class.as_ref()) {
+                    c[dst] = tc[src];
+                }
             }
         }
     }
     stats.pixels_hit = hit_mask.iter().filter(|&&m| m).count() as u64;
     let image = output::rgb_image(w, h, &color);
     let depth = opts.want_depth.then(|| output::depth_image(w, h, &depth_t));
-    let normals_img = opts.want_normals.then(|| {
-        let px: Vec<Rgb<u8>> = normals.iter().map(|&n| output::normal_pixel(n)).collect();
-        output::rgb_image(w, h, &px)
-    });
-    let classify = opts.want_classify.then(|| {
-        let px: Vec<Rgb<u8>> = class
-            .iter()
-            .map(|c| match c {
-                Class::Outside => Rgb([0, 0, 0]),
-                Class::Background => Rgb([30, 50, 140]),
-                Class::Included => Rgb([40, 180, 70]),
-                Class::Ray => Rgb([210, 60, 40]),
-            })
-            .collect();
-        output::rgb_image(w, h, &px)
-    });
+    let normals_img = normals.map(|px| output::rgb_image(w, h, &px));
+    let classify = class.map(|px| output::rgb_image(w, h, &px));
     stats.output_ms = out_start.elapsed().as_secs_f64() * 1e3;
     stats.time_ms = start.elapsed().as_secs_f64() * 1e3;
     Ok(RenderOutput {
@@ -376,13 +365,23 @@ pub fn render(
     })
 }
 
+/// The classification map's colour of a pixel.
+fn class_color(c: Class) -> Rgb<u8> {
+    match c {
+        Class::Outside => Rgb([0, 0, 0]),
+        Class::Background => Rgb([30, 50, 140]),
+        Class::Included => Rgb([40, 180, 70]),
+        Class::Ray => Rgb([210, 60, 40]),
+    }
+}
+
 fn ms_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
 fn render_tile(
     tr: &Tracer<'_>,
-    method: Method,
+    opts: &RenderOptions,
     x0: u32,
     y0: u32,
     tw: u32,
@@ -411,6 +410,7 @@ fn render_tile(
         class: vec![Class::Outside; n],
         included: Vec::new(),
     };
+    let method = opts.method;
     let all: Vec<u32> = (0..tr.evals.len() as u32).collect();
     match method {
         Method::Beam => beam::trace_tile(tr, &mut tile, th, &mut st),
@@ -484,7 +484,7 @@ fn render_tile(
 
     let t_shade = Instant::now();
     let mut color = vec![background; n];
-    let mut normals = vec![None; n];
+    let mut normals = opts.want_normals.then(|| vec![Rgb([0u8; 3]); n]);
     let mut shadow_ms = 0.0;
     for k in 0..n {
         if let Some(s) = &surfs[k] {
@@ -492,7 +492,9 @@ fn render_tile(
             let c = shade::shade(tr, s, &lit_by_beam[k * nl..(k + 1) * nl], &mut st);
             shadow_ms += ms_since(t0);
             color[k] = output::srgb_pixel(c);
-            normals[k] = Some(s.n);
+            if let Some(nv) = normals.as_mut() {
+                nv[k] = output::normal_pixel(Some(s.n));
+            }
         }
     }
     // Per-pixel lighting time is dominated by shadow segments.
@@ -504,9 +506,15 @@ fn render_tile(
         w: tw,
         h: th,
         color,
-        hits: tile.hits,
+        depth: tile
+            .hits
+            .iter()
+            .map(|h| h.map_or(f64::INFINITY, |h| h.t))
+            .collect(),
         normals,
-        class: tile.class,
+        class: opts
+            .want_classify
+            .then(|| tile.class.iter().map(|&c| class_color(c)).collect()),
         stats: st,
     }
 }

@@ -10,9 +10,11 @@
 //! directional light: up to twice the bounds diagonal, then clipped to the
 //! bounds, outside which there is no surface) is bisected; a piece is free
 //! when every object's interval over it (clipped to the bounds) is strictly
-//! positive, or, for the piece that starts at q, when every object that may
-//! vanish there is proven increasing along the segment (interval gradient
-//! · segment direction > 0) and positive at q. A piece shorter than ε/2
+//! positive, or when every object that may vanish there is proven
+//! increasing along the segment (interval gradient · segment direction > 0)
+//! and every object is proven positive at the piece's start (at q: an
+//! interval test of q; further on: the previous piece was proven positive
+//! up to its end inside the bounds). A piece shorter than ε/2
 //! that is not free, or an exhausted budget, means shadow.
 //!
 //! For an included block, one shadow beam first tests all its hit points
@@ -90,6 +92,11 @@ pub(crate) fn segment_free(
     let n = tr.evals.len();
     let mut stack = vec![(0.0f64, 1.0f64)];
     let mut pieces = 0usize;
+    // Pieces are settled front to back and contiguously, so when a piece
+    // is popped everything before it is free; `front_ok` says, in
+    // addition, that every object is proven positive at the piece's start
+    // on every segment (at s = 0: the caller's start check).
+    let mut front_ok = start_ok;
     while let Some((a, c)) = stack.pop() {
         pieces += 1;
         if pieces > MAX_SHADOW_PIECES {
@@ -98,21 +105,25 @@ pub(crate) fn segment_free(
         let s = Interval::new(a, c);
         let bx: IBox = std::array::from_fn(|i| q[i].add(s.mul(delta[i])));
         let Some(clip) = box_meet(bx, bounds) else {
+            // Wholly outside the bounds: no surface, but nothing known of f.
+            front_ok = false;
             continue;
         };
-        let mut free = true;
+        let inside_bounds = clip == bx;
         let mut maybe: Vec<usize> = Vec::new();
         for k in 0..n {
             let f = tr.interval(k, clip, st);
             if !(f.is_empty() || f.lo > 0.0) {
-                free = false;
                 maybe.push(k);
             }
         }
-        if free {
+        if maybe.is_empty() {
+            front_ok = inside_bounds;
             continue;
         }
-        if a == 0.0 && start_ok {
+        // Positive at the start and increasing along every segment over
+        // the piece: positive on the whole piece.
+        if front_ok {
             let increasing = maybe.iter().all(|&k| {
                 let g = tr.interval_grad(k, bx, st);
                 let dd =
@@ -122,6 +133,7 @@ pub(crate) fn segment_free(
                 dd.lo > 0.0
             });
             if increasing {
+                front_ok = inside_bounds;
                 continue;
             }
         }
