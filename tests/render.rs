@@ -368,6 +368,59 @@ fn sphere_depth_and_mask_match_closed_form() {
 }
 
 #[test]
+fn auxiliary_images_show_normals_depth_and_classes() {
+    let sc = scene(1, Camera::default(), vec![no_shadow_light()]);
+    let o = RenderOptions {
+        want_depth: true,
+        want_normals: true,
+        want_classify: true,
+        ..opts(48, 48, Method::Beam)
+    };
+    let out = run(&sc, vec![sphere()], &o);
+    // The sphere's normal at the centre of the view points at the eye.
+    let e = sc.camera.eye;
+    let len = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
+    let want = e.map(|c| (c / len * 0.5 + 0.5) * 255.0);
+    let got = out.normals.as_ref().unwrap().get_pixel(24, 24).0;
+    for c in 0..3 {
+        assert!(
+            (f64::from(got[c]) - want[c]).abs() < 6.0,
+            "{got:?} vs {want:?}"
+        );
+    }
+    let depth = out.depth.as_ref().unwrap();
+    assert!(depth.get_pixel(24, 24).0[0] < 1000);
+    assert_eq!(depth.get_pixel(0, 0).0[0], u16::MAX);
+    assert_eq!(
+        *out.normals.as_ref().unwrap().get_pixel(0, 0),
+        image::Rgb([0, 0, 0])
+    );
+    let class = out.classify.as_ref().unwrap();
+    let green = image::Rgb([40, 180, 70]);
+    assert_eq!(*class.get_pixel(24, 24), green);
+    let json = out.stats.to_json();
+    for key in [
+        "width",
+        "height",
+        "pixels_hit",
+        "rays",
+        "interval_evals",
+        "point_evals",
+        "shadow_rays",
+        "shadow_rays_saved",
+        "blocks_rejected",
+        "blocks_included",
+        "blocks_undecided",
+        "time_ms",
+        "compile_ms",
+    ] {
+        assert!(json.get(key).is_some(), "{key}");
+    }
+    assert_eq!(json["width"], 48);
+    assert!(json["blocks_included"].as_u64().unwrap() > 0);
+}
+
+#[test]
 fn torus_depth_and_mask_match_sphere_traced_reference() {
     let sc = scene(1, torus_camera(), vec![no_shadow_light()]);
     for method in [Method::Beam, Method::Pixel] {
