@@ -11,7 +11,15 @@
 //! then has its first root in [ta, tb] and each pixel only refines that
 //! bracket on the point evaluator. Blocks that are neither split in four,
 //! keeping the rejected prefix and dropping objects proven positive over
-//! the whole remaining beam; single pixels get [`super::ray::trace_ray`].
+//! the whole remaining beam; single pixels get a guaranteed single ray
+//! ([`super::ray`]).
+//!
+//! A block whose rays' start points (each at its own clip start) all lie
+//! where F < 0 is settled at once: every ray hits at its start (cut-away
+//! faces, filled 2D masks). Over a block, an object's interval that
+//! straddles 0 is tightened by the mean-value form
+//! (`Tracer::interval_tight`), which pays off on the small hulls near a
+//! surface, where the natural extension overestimates most.
 //!
 //! An included block's depth is the root that the bracket refinement
 //! converges to; the first root is guaranteed to lie in [ta, tb], whose
