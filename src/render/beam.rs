@@ -7,9 +7,11 @@
 //! strictly positive are rejected. If all of T is rejected the block is
 //! background and no ray is traced. Otherwise, with [t0, ta] rejected, the
 //! inclusion test checks F over the hull of the block's points at t = ta
-//! (strictly positive) and at some tb > ta (strictly negative): every ray
-//! then has its first root in [ta, tb] and each pixel only refines that
-//! bracket on the point evaluator. Blocks that are neither split in four,
+//! (strictly positive) and at some tb > ta (strictly negative), and that
+//! F is strictly decreasing along every ray over the beam piece [ta, tb]
+//! (interval gradient · direction < 0): every ray then has exactly one
+//! root in [ta, tb], its first, and each pixel only refines that bracket
+//! on the point evaluator. Blocks that are neither split in four,
 //! keeping the rejected prefix and dropping objects proven positive over
 //! the whole remaining beam; single pixels get a guaranteed single ray
 //! ([`super::ray`]).
@@ -20,14 +22,8 @@
 //! straddles 0 is tightened by the mean-value form
 //! (`Tracer::interval_tight`), which pays off on the small hulls near a
 //! surface, where the natural extension overestimates most.
-//!
-//! An included block's depth is the root that the bracket refinement
-//! converges to; the first root is guaranteed to lie in [ta, tb], whose
-//! width is at most a few block footprints, so a second crossing inside
-//! that bracket (a feature thinner than the block footprint) can shift the
-//! depth within the bracket, never lose the surface.
 
-use super::camera::{IBox, PixelRay, box_hull, ray_box};
+use super::camera::{CornerRays, IBox, PixelRay, box_hull, ray_box};
 use super::ray::{refine, scene_point, trace_ray};
 use super::{Class, Hit, Tracer};
 use crate::interval::Interval;
@@ -176,9 +172,12 @@ fn block(
             let tb2 = (ta + mult * w).min(t1);
             let fb = eval_min(Interval::point(tb2), st);
             if fb.hi < 0.0 {
-                st.blocks_included += 1;
-                include_block(tr, tile, b, ta, tb2, live, st);
-                return;
+                if decreasing(tr, &corners, Interval::new(ta, tb2), live, st) {
+                    st.blocks_included += 1;
+                    include_block(tr, tile, b, ta, tb2, live, st);
+                    return;
+                }
+                break;
             }
             if tb2 >= t1 {
                 break;
@@ -205,6 +204,38 @@ fn block(
             }
         }
     }
+}
+
+// Whether the scene function is strictly decreasing along every ray of the
+// block over T: every live object that may be ≤ 0 on the beam piece has
+// ∇F · d < 0 there (d over the block's directions, the hull of the corner
+// directions since d is affine in screen position). Objects positive on
+// the piece do not change where the minimum vanishes, and a minimum of
+// strictly decreasing functions is strictly decreasing; so with a sign
+// change over T each ray has exactly one root there, and the refinement
+// converges to the first root, not a later one.
+fn decreasing(
+    tr: &Tracer<'_>,
+    corners: &CornerRays,
+    t: Interval,
+    live: &[u32],
+    st: &mut RenderStats,
+) -> bool {
+    let hb = corners.hull(t);
+    let c = &corners.0;
+    let dirs = box_hull(box_hull(c[0].1, c[1].1), box_hull(c[2].1, c[3].1));
+    live.iter().all(|&k| {
+        let f = tr.interval(k as usize, hb, st);
+        if f.is_empty() || f.lo > 0.0 {
+            return true;
+        }
+        let g = tr.interval_grad(k as usize, hb, st);
+        let dfdt =
+            g.d.iter()
+                .zip(&dirs)
+                .fold(Interval::point(0.0), |acc, (gi, di)| acc.add(gi.mul(*di)));
+        dfdt.hi < 0.0
+    })
 }
 
 // Whether every ray of the block starts inside a solid, proven by F < 0
