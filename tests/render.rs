@@ -368,6 +368,28 @@ fn sphere_depth_and_mask_match_closed_form() {
 }
 
 #[test]
+fn a_thin_layer_in_front_of_a_solid_is_the_first_hit() {
+    // A shell of thickness 0.02 around a solid core of radius 0.9: a block
+    // can be positive in front and negative inside the core, yet its rays'
+    // first root is on the thin shell. Inclusion must not pick the core.
+    let sc = scene(2, Camera::default(), vec![no_shadow_light()]);
+    let ev: Vec<Arc<dyn Evaluator>> = vec![
+        Arc::new(Shell { h: 0.01 }),
+        Arc::new(Sphere {
+            c: [0.0; 3],
+            r2: 0.81,
+        }),
+    ];
+    let out = run(&sc, ev, &opts(48, 48, Method::Beam));
+    let sdf = |p: [f64; 3]| {
+        let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+        ((r - 1.0).abs() - 0.01).min(r - 0.9)
+    };
+    let c = check_against_reference(&sc, &out, 48, 48, &sdf);
+    assert!(c.compared > 1800, "{} {}", c.compared, c.skipped);
+}
+
+#[test]
 fn auxiliary_images_show_normals_depth_and_classes() {
     let sc = scene(1, Camera::default(), vec![no_shadow_light()]);
     let o = RenderOptions {

@@ -3,7 +3,8 @@
 //!
 //! # First-root policy
 //! The ray's range [t0, t1] is bisected front to back. A piece is dropped
-//! when every live object's interval over the piece's box is strictly
+//! when for every live object the interval over the piece's box, or the
+//! centred form along the ray (F(p(m)) + (∇F·d)·([a, b] − m)), is strictly
 //! positive (or empty: f undefined there). Where one object alone may
 //! vanish on a piece, interval Newton (dF/dt = ∇F·d from `interval_grad`)
 //! shrinks the piece or drops it, and a piece on which that object is
@@ -16,7 +17,7 @@
 //! start point has f < 0 (point evaluation) hits at t0: cut-away views of
 //! solids clipped by the bounds, and filled masks for 2D functions.
 
-use super::camera::{PixelRay, ray_box};
+use super::camera::{IBox, PixelRay, ray_box};
 use super::{Hit, Tracer};
 use crate::interval::Interval;
 use crate::render::stats::RenderStats;
@@ -174,7 +175,8 @@ pub(crate) fn trace_ray(
         cand.clear();
         for &k in live {
             let f = tr.interval(k as usize, bx, st);
-            if !f.is_empty() && f.lo <= 0.0 {
+            if !f.is_empty() && f.lo <= 0.0 && !centred_positive(tr, ray, k as usize, bx, a, b, st)
+            {
                 cand.push((k, f));
             }
         }
@@ -214,6 +216,34 @@ pub(crate) fn trace_ray(
         stack.push((a, m));
     }
     None
+}
+
+// The centred form along the ray: f(p(t)) ∈ F(p(m)) + (∇F(box)·d)·([a, b] − m)
+// for t ∈ [a, b]. One-dimensional, it ignores the box's extent across the
+// ray, which makes the natural extension of a grazing segment's box
+// straddle 0 while the segment stays clear. True if it proves f > 0.
+// Sound under the same gradient-enclosure assumption as interval Newton.
+fn centred_positive(
+    tr: &Tracer<'_>,
+    ray: &PixelRay,
+    k: usize,
+    bx: IBox,
+    a: f64,
+    b: f64,
+    st: &mut RenderStats,
+) -> bool {
+    let g = tr.interval_grad(k, bx, st);
+    let dfdt = (0..3).fold(Interval::point(0.0), |acc, i| acc.add(g.d[i].mul(ray.d[i])));
+    if dfdt.is_empty() || !dfdt.lo.is_finite() || !dfdt.hi.is_finite() {
+        return false;
+    }
+    let m = 0.5 * (a + b);
+    let fm = tr.interval(k, ray_box(ray.o, ray.d, Interval::point(m)), st);
+    if fm.is_empty() {
+        return false;
+    }
+    let off = Interval::new(a, b).sub(Interval::point(m));
+    fm.add(dfdt.mul(off)).lo > 0.0
 }
 
 // A narrow piece with 0 ∈ F: refine a sign change if the ends show one,
