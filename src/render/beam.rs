@@ -126,14 +126,16 @@ fn block(
     // Screen extents of the pixel centres.
     let xs = ((b.x0 + tile.x0) as f64 + 0.5, (b.x1 + tile.x0) as f64 - 0.5);
     let ys = ((b.y0 + tile.y0) as f64 + 0.5, (b.y1 + tile.y0) as f64 - 0.5);
-    let side = f64::from((b.x1 - b.x0).max(b.y1 - b.y0));
+    let side_px = (b.x1 - b.x0).max(b.y1 - b.y0);
+    let side = f64::from(side_px);
+    let level = side_px.ilog2() as usize;
     let min_w = |t: f64| side * tr.cam.spacing(t).max(1e-9);
     let corners = tr.cam.corners(xs, ys);
     let eval_min = |t: Interval, st: &mut RenderStats| -> Interval {
         let hb = corners.hull(t);
         let mut f = Interval::point(f64::INFINITY);
         for &k in live {
-            let v = tr.interval_tight(k as usize, hb, st);
+            let v = tr.interval_tight(k as usize, hb, level, st);
             if v.is_empty() {
                 continue;
             }

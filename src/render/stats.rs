@@ -28,6 +28,13 @@ pub struct RenderStats {
     pub shadow_beams_ok: u64,
     /// Shadow beams tried.
     pub shadow_beams: u64,
+    /// Mean-value tightenings of a block interval tried.
+    pub mean_value_tries: u64,
+    /// Mean-value tightenings that proved a sign the natural form did not.
+    pub mean_value_wins: u64,
+    /// Mean-value (tries, wins) per block-size class, log2 of the side;
+    /// drives the per-tile choice to use the form (not in the JSON).
+    pub mean_value_levels: [(u64, u64); super::MV_LEVELS],
     /// Blocks (over one pixel) whose whole ray range was rejected.
     pub blocks_rejected: u64,
     /// Blocks (over one pixel) settled by the inclusion test.
@@ -60,6 +67,12 @@ impl RenderStats {
         self.shadow_rays_saved += o.shadow_rays_saved;
         self.shadow_beams_ok += o.shadow_beams_ok;
         self.shadow_beams += o.shadow_beams;
+        self.mean_value_tries += o.mean_value_tries;
+        self.mean_value_wins += o.mean_value_wins;
+        for (a, b) in self.mean_value_levels.iter_mut().zip(&o.mean_value_levels) {
+            a.0 += b.0;
+            a.1 += b.1;
+        }
         self.blocks_rejected += o.blocks_rejected;
         self.blocks_included += o.blocks_included;
         self.blocks_undecided += o.blocks_undecided;
@@ -82,6 +95,8 @@ impl RenderStats {
             "shadow_rays_saved": self.shadow_rays_saved,
             "shadow_beams_ok": self.shadow_beams_ok,
             "shadow_beams": self.shadow_beams,
+            "mean_value_tries": self.mean_value_tries,
+            "mean_value_wins": self.mean_value_wins,
             "blocks_rejected": self.blocks_rejected,
             "blocks_included": self.blocks_included,
             "blocks_undecided": self.blocks_undecided,
