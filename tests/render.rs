@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use ibeam::eval::{Evaluator, Grad, IntervalGrad};
 use ibeam::interval::Interval;
-use ibeam::ir::Builder;
+use ibeam::ir::{BinaryOp, Builder, Var};
 use ibeam::render::camera::{PixelRay, RayCamera};
 use ibeam::render::output::srgb_pixel;
 use ibeam::render::shade::AMBIENT;
@@ -186,14 +186,25 @@ impl Evaluator for Disc {
 
 // ---------------------------------------------------------------- helpers
 
-fn object(name: &str, color: [f64; 3]) -> Object {
+/// An object whose (stand-in) function reads the coordinates in `vars`:
+/// the renderer uses only that from the function; the evaluators passed
+/// alongside compute the shape.
+fn object_using(name: &str, color: [f64; 3], vars: &[Var]) -> Object {
     let mut b = Builder::new();
-    let root = b.constant(0.0);
+    let mut root = b.constant(0.0);
+    for &v in vars {
+        let x = b.var(v);
+        root = b.binary(BinaryOp::Add, root, x);
+    }
     Object {
         name: name.into(),
         function: b.finish(root),
         color,
     }
+}
+
+fn object(name: &str, color: [f64; 3]) -> Object {
+    object_using(name, color, &Var::ALL)
 }
 
 fn scene(n: usize, camera: Camera, lights: Vec<Light>) -> Scene {
@@ -598,7 +609,8 @@ fn a_2d_function_renders_as_a_filled_mask() {
         up: [0.0, 1.0, 0.0],
         projection: Projection::Orthographic { width: 4.0 },
     };
-    let sc = scene(1, cam, vec![no_shadow_light()]);
+    let mut sc = scene(1, cam, vec![no_shadow_light()]);
+    sc.objects[0] = object_using("disc", [0.5; 3], &[Var::X, Var::Y]);
     let (w, h) = (32, 32);
     let out = run(&sc, vec![Arc::new(Disc)], &opts(w, h, Method::Beam));
     let rc = RayCamera::new(&sc.camera, w, h).unwrap();
@@ -612,6 +624,8 @@ fn a_2d_function_renders_as_a_filled_mask() {
             }
         }
     }
+    let px = run(&sc, vec![Arc::new(Disc)], &opts(w, h, Method::Pixel));
+    assert_eq!(out.hit_mask, px.hit_mask);
     // Whole blocks inside the disc are settled at once.
     assert!(out.stats.blocks_included > 0);
     assert!(out.stats.rays < 400, "{}", out.stats.rays);

@@ -143,6 +143,17 @@ fn block(
         }
         f
     };
+    if tr.flat {
+        // f is constant along the rays: bisecting T cannot help.
+        if eval_min(Interval::new(t0, t1), st).lo > 0.0 {
+            st.blocks_rejected += 1;
+            set_block(tile, b, Class::Background);
+        } else {
+            st.blocks_undecided += 1;
+            split(tr, tile, b, t0, live, st);
+        }
+        return;
+    }
     // Front-to-back rejection sweep.
     let mut stack = vec![(t0, t1)];
     let mut pieces = 0usize;
@@ -197,12 +208,24 @@ fn block(
             !(v.is_empty() || v.lo > 0.0)
         })
         .collect();
+    split(tr, tile, b, ta, &sub_live, st);
+}
+
+// Traces the four quarters of a block.
+fn split(
+    tr: &Tracer<'_>,
+    tile: &mut TileRays,
+    b: Block,
+    t_floor: f64,
+    live: &[u32],
+    st: &mut RenderStats,
+) {
     let mx = (b.x0 + b.x1).div_ceil(2);
     let my = (b.y0 + b.y1).div_ceil(2);
     for (x0, x1) in [(b.x0, mx), (mx, b.x1)] {
         for (y0, y1) in [(b.y0, my), (my, b.y1)] {
             if x0 < x1 && y0 < y1 {
-                block(tr, tile, Block { x0, y0, x1, y1 }, ta, &sub_live, st);
+                block(tr, tile, Block { x0, y0, x1, y1 }, t_floor, live, st);
             }
         }
     }

@@ -192,6 +192,10 @@ pub(crate) struct Tracer<'a> {
     pub lights: &'a [Light],
     pub bounds: Bounds,
     pub diag: f64,
+    /// Every object is proven constant along every ray inside the bounds
+    /// (2D models viewed along the missing axis): a block's T range then
+    /// needs no bisection.
+    pub flat: bool,
 }
 
 impl Tracer<'_> {
@@ -279,7 +283,9 @@ struct TileOut {
     stats: RenderStats,
 }
 
-/// Renders `scene` with one evaluator per object (same order).
+/// Renders `scene` with one evaluator per object (same order):
+/// `evaluators[i]` evaluates `scene.objects[i].function` (the renderer
+/// reads the functions only to see which of x, y, z they use).
 pub fn render(
     scene: &Scene,
     evaluators: &[Arc<dyn Evaluator>],
@@ -311,6 +317,7 @@ pub fn render(
         lights: &scene.lights,
         bounds: b,
         diag: camera::norm(camera::sub(b.max, b.min)),
+        flat: constant_along_rays(&cam, scene),
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.threads.unwrap_or(0))
@@ -387,6 +394,20 @@ pub fn render(
         depth_t,
         stats,
     })
+}
+
+// Whether every object is constant along every ray: the camera is
+// orthographic (one direction d for all rays) and d has an exact zero
+// component on every coordinate an object's function reads (2D models seen
+// along the missing axis). Reads the scene functions' variable use, which
+// simplification can only shrink, so it holds for the evaluators too.
+fn constant_along_rays(cam: &RayCamera, scene: &Scene) -> bool {
+    let one_direction = cam.dx == [0.0; 3] && cam.dy == [0.0; 3];
+    one_direction
+        && scene.objects.iter().all(|o| {
+            let uses = o.function.uses_vars();
+            (0..3).all(|i| !uses[i] || cam.d0[i] == 0.0)
+        })
 }
 
 /// The classification map's colour of a pixel.

@@ -403,6 +403,7 @@ mod tests {
             lights: &[],
             bounds: Bounds::default(),
             diag: 7.0,
+            flat: false,
         };
         let (o, d) = ([-2.0, 0.0, 0.0], [1.0, 0.0, 0.0]);
         let ray = PixelRay {

@@ -68,13 +68,14 @@ pub(crate) fn light_dir(
 }
 
 /// Whether every segment from a point of `q` to `end` is proven free of
-/// surface; `start_ok` says every start point was proven outside all
-/// objects (enables the monotonicity test on the first piece).
+/// surface. `starts` are the segments' start points (all inside `q`);
+/// they are proven outside every object only if the monotonicity test on
+/// the first piece needs it (one interval evaluation per point and object).
 pub(crate) fn segment_free(
     tr: &Tracer<'_>,
     q: IBox,
+    starts: &[[f64; 3]],
     end: SegEnd,
-    start_ok: bool,
     min_w: f64,
     st: &mut RenderStats,
 ) -> bool {
@@ -95,8 +96,8 @@ pub(crate) fn segment_free(
     // Pieces are settled front to back and contiguously, so when a piece
     // is popped everything before it is free; `front_ok` says, in
     // addition, that every object is proven positive at the piece's start
-    // on every segment (at s = 0: the caller's start check).
-    let mut front_ok = start_ok;
+    // on every segment (None at s = 0 until the start points are checked).
+    let mut front_ok: Option<bool> = None;
     while let Some((a, c)) = stack.pop() {
         pieces += 1;
         if pieces > MAX_SHADOW_PIECES {
@@ -106,7 +107,7 @@ pub(crate) fn segment_free(
         let bx: IBox = std::array::from_fn(|i| q[i].add(s.mul(delta[i])));
         let Some(clip) = box_meet(bx, bounds) else {
             // Wholly outside the bounds: no surface, but nothing known of f.
-            front_ok = false;
+            front_ok = Some(false);
             continue;
         };
         let inside_bounds = clip == bx;
@@ -118,12 +119,20 @@ pub(crate) fn segment_free(
             }
         }
         if maybe.is_empty() {
-            front_ok = inside_bounds;
+            front_ok = Some(inside_bounds);
             continue;
         }
         // Positive at the start and increasing along every segment over
         // the piece: positive on the whole piece.
-        if front_ok {
+        let ok = match front_ok {
+            Some(v) => v,
+            None => {
+                let v = starts.iter().all(|&p| start_state(tr, p, st) == Some(true));
+                front_ok = Some(v);
+                v
+            }
+        };
+        if ok {
             let increasing = maybe.iter().all(|&k| {
                 let g = tr.interval_grad(k, bx, st);
                 let dd =
@@ -133,7 +142,7 @@ pub(crate) fn segment_free(
                 dd.lo > 0.0
             });
             if increasing {
-                front_ok = inside_bounds;
+                front_ok = Some(inside_bounds);
                 continue;
             }
         }
@@ -237,19 +246,16 @@ pub(crate) fn shadow_beam(
         return false;
     };
     let mut qb = point_box(first.q);
-    let mut start_ok = true;
     let mut min_w = f64::INFINITY;
     for s in surfs {
         qb = box_hull(qb, point_box(s.q));
         min_w = min_w.min(s.min_w);
-        if start_ok && start_state(tr, s.q, st) != Some(true) {
-            start_ok = false;
-        }
     }
+    let starts: Vec<[f64; 3]> = surfs.iter().map(|s| s.q).collect();
     // A beam cannot be resolved much below its own cross-section: give up
     // (and fall back to per-pixel segments) once pieces get that short.
     let diam = qb.iter().map(|c| c.width() * c.width()).sum::<f64>().sqrt();
-    segment_free(tr, qb, end, start_ok, min_w.max(diam), st)
+    segment_free(tr, qb, &starts, end, min_w.max(diam), st)
 }
 
 /// Shades one surface point; `lit_by_beam[l]` says a shadow beam already
@@ -271,11 +277,7 @@ pub(crate) fn shade(
         }
         if light.shadows && !lit_by_beam.get(li).copied().unwrap_or(false) {
             st.shadow_rays += 1;
-            let free = match start_state(tr, s.q, st) {
-                Some(false) => false,
-                state => segment_free(tr, point_box(s.q), end, state == Some(true), s.min_w, st),
-            };
-            if !free {
+            if !segment_free(tr, point_box(s.q), &[s.q], end, s.min_w, st) {
                 continue;
             }
         }
