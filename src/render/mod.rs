@@ -263,7 +263,6 @@ impl Tracer<'_> {
         st.point_evals += 1;
         self.evals[k].point(p)
     }
-    #[allow(dead_code)]
     pub(crate) fn point_grad(&self, k: usize, p: [f64; 3], st: &mut RenderStats) -> Grad {
         st.point_evals += 1;
         self.evals[k].point_grad(p)

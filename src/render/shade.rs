@@ -214,8 +214,7 @@ pub(crate) fn surface(
             color,
         };
     }
-    st.point_evals += 1;
-    let g = tr.evals[hit.obj].point_grad(p);
+    let g = tr.point_grad(hit.obj, p, st);
     let nout = normalize(g.d).unwrap_or(v);
     let n = if dot(nout, v) < 0.0 {
         scale(nout, -1.0)
