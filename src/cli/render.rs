@@ -1,17 +1,219 @@
-//! `ibeam render`.
+//! `ibeam render`: scene settings are the defaults, flags override them.
 
-use super::CliError;
+use std::fs::OpenOptions;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use super::{CliError, EvalKind};
+use crate::render::camera::RayCamera;
+use crate::render::{MAX_SIZE, Method, RenderOptions, render};
+
+/// Visibility method on the command line.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, clap::ValueEnum, Default)]
+pub enum MethodArg {
+    /// Beams with interval rejection and inclusion tests (guaranteed).
+    #[default]
+    Beam,
+    /// One guaranteed interval ray per pixel (slower; same pixels).
+    Pixel,
+    /// Fixed-step point sampling (fast, can miss thin features).
+    Point,
+}
 
 /// Arguments of `ibeam render`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Scene file (`.ib`) or Fidget model (`.vm`).
-    pub file: std::path::PathBuf,
+    pub file: PathBuf,
+    /// Output PNG (8-bit sRGB).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Image size as WxH (default: the scene's); cost grows with the pixels.
+    #[arg(long, value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// Worker threads (default: one per core); output is the same for any.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub threads: Option<u32>,
+    /// Visibility method.
+    #[arg(long, value_enum, default_value_t = MethodArg::Beam)]
+    pub method: MethodArg,
+    /// Samples per ray for `--method point` (cost is linear in it).
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    pub steps: u32,
+    /// Evaluator: native code (default) or the reference interpreter.
+    #[arg(long = "eval", value_enum, default_value_t = EvalKind::Jit)]
+    pub eval: EvalKind,
+    /// Also write a 16-bit depth PNG (nearest hit 0, background 65535).
+    #[arg(long)]
+    pub depth: Option<PathBuf>,
+    /// Also write a normal map PNG ((n + 1) / 2).
+    #[arg(long)]
+    pub normals: Option<PathBuf>,
+    /// Also write a PNG of how each pixel was decided (blue rejected,
+    /// green included block, red single ray).
+    #[arg(long)]
+    pub classify: Option<PathBuf>,
+    /// Write the render statistics as JSON.
+    #[arg(long)]
+    pub stats_json: Option<PathBuf>,
+    /// No progress and no summary.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Parses `WxH` with both sides in 1..=16384.
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("size `{s}` is not WxH"))?;
+    let side = |v: &str| -> Result<u32, String> {
+        let n: u32 = v
+            .trim()
+            .parse()
+            .map_err(|_| format!("size `{s}`: `{v}` is not a whole number"))?;
+        if n == 0 || n > MAX_SIZE {
+            return Err(format!("size `{s}`: each side must be in 1..={MAX_SIZE}"));
+        }
+        Ok(n)
+    };
+    Ok((side(w)?, side(h)?))
+}
+
+/// Output files opened before rendering, so an unwritable path fails
+/// fast; files this run created are removed again if it fails.
+struct Outputs {
+    created: Vec<PathBuf>,
+    done: bool,
+}
+
+impl Outputs {
+    fn claim(&mut self, path: &Path) -> Result<(), CliError> {
+        let existed = path.exists();
+        OpenOptions::new()
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(path)
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        if !existed {
+            self.created.push(path.to_path_buf());
+        }
+        Ok(())
+    }
+}
+
+impl Drop for Outputs {
+    fn drop(&mut self) {
+        if !self.done {
+            for p in &self.created {
+                let _ = std::fs::remove_file(p);
+            }
+        }
+    }
 }
 
 /// Runs `ibeam render`.
 pub fn run(args: &Args) -> Result<(), CliError> {
+    let mut outputs = Outputs {
+        created: Vec::new(),
+        done: false,
+    };
+    let extra = [&args.depth, &args.normals, &args.classify, &args.stats_json];
+    for p in std::iter::once(&args.output).chain(extra.into_iter().flatten()) {
+        outputs.claim(p)?;
+    }
     let scene = crate::lang::load_scene(&args.file)?;
-    let _ = scene;
-    Err("not built yet".into())
+    if scene.objects.is_empty() {
+        return Err(format!("{}: the scene has no objects", args.file.display()).into());
+    }
+    let (width, height) = args.size.unwrap_or(scene.render.size);
+    if width == 0 || height == 0 || width > MAX_SIZE || height > MAX_SIZE {
+        return Err(format!("image size {width}x{height} is invalid (1..={MAX_SIZE})").into());
+    }
+    RayCamera::new(&scene.camera, width, height)
+        .map_err(|e| format!("{}: bad camera: {e}", args.file.display()))?;
+
+    // The JIT compiles lazily, on first use of each evaluator kind, so this
+    // times building the evaluators, not all of the native code.
+    let t = Instant::now();
+    let evaluators = super::build_evaluators(&scene, args.eval)?;
+    let compile_ms = t.elapsed().as_secs_f64() * 1e3;
+
+    let opts = RenderOptions {
+        width,
+        height,
+        threads: args.threads.map(|n| n as usize),
+        method: match args.method {
+            MethodArg::Beam => Method::Beam,
+            MethodArg::Pixel => Method::Pixel,
+            MethodArg::Point => Method::Point { steps: args.steps },
+        },
+        want_depth: args.depth.is_some(),
+        want_normals: args.normals.is_some(),
+        want_classify: args.classify.is_some(),
+        progress: !args.quiet && std::io::stderr().is_terminal(),
+    };
+    let mut out = render(&scene, &evaluators, &opts)?;
+    out.stats.compile_ms = compile_ms;
+
+    let png = |img: &dyn Fn(&Path) -> image::ImageResult<()>, p: &Path| -> Result<(), CliError> {
+        img(p).map_err(|e| format!("cannot write {}: {e}", p.display()).into())
+    };
+    png(
+        &|p| out.image.save_with_format(p, image::ImageFormat::Png),
+        &args.output,
+    )?;
+    if let (Some(p), Some(img)) = (&args.depth, &out.depth) {
+        png(&|p| img.save_with_format(p, image::ImageFormat::Png), p)?;
+    }
+    if let (Some(p), Some(img)) = (&args.normals, &out.normals) {
+        png(&|p| img.save_with_format(p, image::ImageFormat::Png), p)?;
+    }
+    if let (Some(p), Some(img)) = (&args.classify, &out.classify) {
+        png(&|p| img.save_with_format(p, image::ImageFormat::Png), p)?;
+    }
+    if let Some(p) = &args.stats_json {
+        let text = serde_json::to_string_pretty(&out.stats.to_json())?;
+        std::fs::write(p, text + "\n").map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+    }
+    outputs.done = true;
+    if !args.quiet {
+        eprintln!("{}", out.stats);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_parse_and_reject_bad_values() {
+        assert_eq!(parse_size("640x480"), Ok((640, 480)));
+        assert_eq!(parse_size("16X9"), Ok((16, 9)));
+        assert!(parse_size("0x10").is_err());
+        assert!(parse_size("16385x10").is_err());
+        assert!(parse_size("10").is_err());
+        assert!(parse_size("axb").is_err());
+    }
+
+    #[test]
+    fn unwritable_output_fails_before_anything_else() {
+        let mut o = Outputs {
+            created: Vec::new(),
+            done: false,
+        };
+        let bad = Path::new("/nonexistent-dir-ibeam/x.png");
+        assert!(o.claim(bad).is_err());
+        let dir = std::env::temp_dir().join(format!("ibeam-render-cli-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("out.png");
+        o.claim(&p).unwrap();
+        assert!(p.exists());
+        drop(o);
+        // Not marked done: the file this run created is removed again.
+        assert!(!p.exists());
+        let _ = std::fs::remove_dir(&dir);
+    }
 }

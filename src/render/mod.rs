@@ -1,1 +1,564 @@
-//! The guaranteed beam tracer.
+//! The guaranteed beam tracer, after Flórez et al.
+//!
+//! The image is cut into 32×32 tiles traced in parallel. Each tile is a
+//! block of pixels whose rays form a beam ([`camera`] gives its exact
+//! hull); [`beam`] rejects empty stretches of the beam with interval
+//! arithmetic, settles blocks whose rays all cross the surface in a proven
+//! bracket (inclusion test), and splits the rest down to single rays,
+//! which [`ray`] traces with guaranteed first-root isolation. [`shade`]
+//! lights the hits with guaranteed shadows. Two baselines share the code:
+//! [`Method::Pixel`] (one interval ray per pixel, no beams) and
+//! [`Method::Point`] (fixed-step point sampling, the technique the paper
+//! improves on).
+//!
+//! The scene function is the minimum over the objects; the object hit is
+//! the one whose own f is smallest at the hit point. Output is identical
+//! for any thread count: every tile is computed independently and the
+//! results and counters are merged in tile order.
+
+pub mod beam;
+pub mod camera;
+pub mod output;
+pub mod ray;
+pub mod shade;
+pub mod stats;
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use image::{ImageBuffer, Luma, Rgb, RgbImage};
+use rayon::prelude::*;
+
+use crate::eval::{Evaluator, Grad, IntervalGrad};
+use crate::interval::Interval;
+use crate::scene::{Bounds, Light, Scene};
+use camera::{CameraError, IBox, PixelRay, RayCamera};
+pub use stats::RenderStats;
+
+/// Side of the square tiles traced in parallel.
+pub const TILE: u32 = 32;
+/// Block-size classes (log2 of the side) for the mean-value statistics.
+pub const MV_LEVELS: usize = 8;
+/// Largest accepted image side.
+pub const MAX_SIZE: u32 = 16384;
+
+/// How visibility is computed.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Default)]
+pub enum Method {
+    /// Beams of rays with rejection and inclusion tests (the default).
+    #[default]
+    Beam,
+    /// One guaranteed interval ray per pixel, no beams.
+    Pixel,
+    /// Fixed-step point sampling along each ray; misses thin features.
+    Point {
+        /// Samples per ray over its clipped range.
+        steps: u32,
+    },
+}
+
+/// What to render and how.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderOptions {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Worker threads (None: rayon's default, one per core).
+    pub threads: Option<usize>,
+    /// Visibility method.
+    pub method: Method,
+    /// Produce a 16-bit depth image.
+    pub want_depth: bool,
+    /// Produce a normal image.
+    pub want_normals: bool,
+    /// Produce a map of how each pixel was decided.
+    pub want_classify: bool,
+    /// Print tile progress on stderr.
+    pub progress: bool,
+}
+
+impl RenderOptions {
+    /// Beam method, default threads, colour image only.
+    pub fn new(width: u32, height: u32) -> RenderOptions {
+        RenderOptions {
+            width,
+            height,
+            threads: None,
+            method: Method::Beam,
+            want_depth: false,
+            want_normals: false,
+            want_classify: false,
+            progress: false,
+        }
+    }
+}
+
+/// Everything a render produces.
+#[derive(Clone, Debug)]
+pub struct RenderOutput {
+    /// The shaded image, sRGB.
+    pub image: RgbImage,
+    /// Depth (see [`output::depth_image`]) if asked for.
+    pub depth: Option<ImageBuffer<Luma<u16>, Vec<u16>>>,
+    /// Normals as `(n + 1) / 2` if asked for.
+    pub normals: Option<RgbImage>,
+    /// How each pixel was decided if asked for: blue rejected block,
+    /// green included block, red single ray, black outside the bounds.
+    pub classify: Option<RgbImage>,
+    /// Row-major: whether the pixel's ray hit a surface.
+    pub hit_mask: Vec<bool>,
+    /// Row-major: the ray parameter of the hit, +inf for none.
+    pub depth_t: Vec<f64>,
+    /// Counters and times.
+    pub stats: RenderStats,
+}
+
+/// Why a render could not run.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RenderError {
+    /// Width or height is 0 or above [`MAX_SIZE`].
+    BadSize(u32, u32),
+    /// The scene has no objects.
+    NoObjects,
+    /// The number of evaluators differs from the number of objects.
+    EvaluatorCount {
+        /// Objects in the scene.
+        objects: usize,
+        /// Evaluators passed.
+        evaluators: usize,
+    },
+    /// The camera cannot form rays.
+    Camera(CameraError),
+    /// The bounds are empty or not finite.
+    BadBounds,
+    /// The thread pool could not be built.
+    Threads(String),
+}
+
+impl std::fmt::Display for RenderError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RenderError::BadSize(w, h) => {
+                write!(
+                    f,
+                    "image size {w}x{h} is invalid (each side 1..={MAX_SIZE})"
+                )
+            }
+            RenderError::NoObjects => write!(f, "the scene has no objects to render"),
+            RenderError::EvaluatorCount {
+                objects,
+                evaluators,
+            } => write!(f, "{objects} objects but {evaluators} evaluators"),
+            RenderError::Camera(e) => write!(f, "bad camera: {e}"),
+            RenderError::BadBounds => write!(f, "scene bounds are empty or not finite"),
+            RenderError::Threads(e) => write!(f, "cannot start render threads: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for RenderError {}
+
+/// A ray's hit.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Hit {
+    /// Ray parameter.
+    pub t: f64,
+    /// Index of the object hit.
+    pub obj: usize,
+    /// The ray started inside a solid (hit at its clip start).
+    pub inside: bool,
+}
+
+/// How a pixel was decided.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum Class {
+    /// Its ray misses the bounds.
+    Outside,
+    /// Its block was rejected: no surface.
+    Background,
+    /// Its block passed the inclusion test: bracketed refinement.
+    Included,
+    /// A single ray (or a point march).
+    Ray,
+}
+
+/// Shared read-only state of one render.
+pub(crate) struct Tracer<'a> {
+    pub cam: RayCamera,
+    pub evals: &'a [Arc<dyn Evaluator>],
+    pub colors: Vec<[f64; 3]>,
+    pub lights: &'a [Light],
+    pub bounds: Bounds,
+    pub diag: f64,
+    /// Every object is proven constant along every ray inside the bounds
+    /// (2D models viewed along the missing axis): a block's T range then
+    /// needs no bisection.
+    pub flat: bool,
+}
+
+impl Tracer<'_> {
+    pub(crate) fn interval(&self, k: usize, b: IBox, st: &mut RenderStats) -> Interval {
+        st.interval_evals += 1;
+        self.evals[k].interval(b)
+    }
+    /// F over `b`, tightened where it straddles 0 by the mean-value form
+    /// `f(c) + ∇F(b)·(b − c)` (c the box centre), intersected with the
+    /// natural enclosure. Sound wherever the evaluator's gradient
+    /// enclosure covers the (generalised) gradient of f over the box; it is
+    /// used only when every gradient bound is finite, which rules out the
+    /// poles and domain edges where it would not.
+    pub(crate) fn interval_tight(
+        &self,
+        k: usize,
+        b: IBox,
+        level: usize,
+        st: &mut RenderStats,
+    ) -> Interval {
+        let f = self.interval(k, b, st);
+        if f.is_empty() || f.lo > 0.0 || f.hi < 0.0 {
+            return f;
+        }
+        // Where the form seldom decides anything (min/max-heavy functions,
+        // whose gradients are discontinuous), it only costs gradient
+        // evaluations: after 64 tries at one block size (it pays off on
+        // small blocks first) with under 1 in 32 winning, the tile stops
+        // using it at that size. Counts are per tile, so the choice does
+        // not depend on the thread count.
+        let lv = &st.mean_value_levels[level.min(MV_LEVELS - 1)];
+        if lv.0 >= 64 && lv.1 * 32 < lv.0 {
+            return f;
+        }
+        if !b.iter().all(|c| c.lo.is_finite() && c.hi.is_finite()) {
+            return f;
+        }
+        let c: [f64; 3] = b.map(|i| i.mid());
+        let g = self.interval_grad(k, b, st);
+        if !g.d.iter().all(|d| d.lo.is_finite() && d.hi.is_finite()) {
+            return f;
+        }
+        let fc = self.interval(k, camera::point_box(c), st);
+        if fc.is_empty() || !fc.lo.is_finite() || !fc.hi.is_finite() {
+            return f;
+        }
+        let mut mv = fc;
+        for i in 0..3 {
+            mv = mv.add(g.d[i].mul(b[i].sub(Interval::point(c[i]))));
+        }
+        let (lo, hi) = (f.lo.max(mv.lo), f.hi.min(mv.hi));
+        let win = lo > 0.0 || hi < 0.0;
+        st.mean_value_tries += 1;
+        st.mean_value_wins += u64::from(win);
+        let lv = &mut st.mean_value_levels[level.min(MV_LEVELS - 1)];
+        lv.0 += 1;
+        lv.1 += u64::from(win);
+        if lo <= hi { Interval::new(lo, hi) } else { f }
+    }
+    pub(crate) fn interval_grad(&self, k: usize, b: IBox, st: &mut RenderStats) -> IntervalGrad {
+        st.interval_evals += 1;
+        self.evals[k].interval_grad(b)
+    }
+    pub(crate) fn point(&self, k: usize, p: [f64; 3], st: &mut RenderStats) -> f64 {
+        st.point_evals += 1;
+        self.evals[k].point(p)
+    }
+    pub(crate) fn point_grad(&self, k: usize, p: [f64; 3], st: &mut RenderStats) -> Grad {
+        st.point_evals += 1;
+        self.evals[k].point_grad(p)
+    }
+}
+
+struct TileOut {
+    x0: u32,
+    y0: u32,
+    w: u32,
+    h: u32,
+    color: Vec<Rgb<u8>>,
+    // Kept compact: a full-size render holds every tile at once.
+    depth: Vec<f64>,
+    normals: Option<Vec<Rgb<u8>>>,
+    class: Option<Vec<Rgb<u8>>>,
+    stats: RenderStats,
+}
+
+/// Renders `scene` with one evaluator per object (same order):
+/// `evaluators[i]` evaluates `scene.objects[i].function` (the renderer
+/// reads the functions only to see which of x, y, z they use).
+pub fn render(
+    scene: &Scene,
+    evaluators: &[Arc<dyn Evaluator>],
+    opts: &RenderOptions,
+) -> Result<RenderOutput, RenderError> {
+    let start = Instant::now();
+    let (w, h) = (opts.width, opts.height);
+    if w == 0 || h == 0 || w > MAX_SIZE || h > MAX_SIZE {
+        return Err(RenderError::BadSize(w, h));
+    }
+    if scene.objects.is_empty() {
+        return Err(RenderError::NoObjects);
+    }
+    if evaluators.len() != scene.objects.len() {
+        return Err(RenderError::EvaluatorCount {
+            objects: scene.objects.len(),
+            evaluators: evaluators.len(),
+        });
+    }
+    let b = scene.bounds;
+    if !(0..3).all(|i| b.min[i].is_finite() && b.max[i].is_finite() && b.min[i] <= b.max[i]) {
+        return Err(RenderError::BadBounds);
+    }
+    let cam = RayCamera::new(&scene.camera, w, h).map_err(RenderError::Camera)?;
+    let tr = Tracer {
+        cam,
+        evals: evaluators,
+        colors: scene.objects.iter().map(|o| o.color).collect(),
+        lights: &scene.lights,
+        bounds: b,
+        diag: camera::norm(camera::sub(b.max, b.min)),
+        flat: constant_along_rays(&cam, scene),
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(opts.threads.unwrap_or(0))
+        .build()
+        .map_err(|e| RenderError::Threads(e.to_string()))?;
+    let mut tiles = Vec::new();
+    for y0 in (0..h).step_by(TILE as usize) {
+        for x0 in (0..w).step_by(TILE as usize) {
+            tiles.push((x0, y0, TILE.min(w - x0), TILE.min(h - y0)));
+        }
+    }
+    let done = AtomicUsize::new(0);
+    let n_tiles = tiles.len();
+    let background = output::srgb_pixel(scene.render.background);
+    let outs: Vec<TileOut> = pool.install(|| {
+        tiles
+            .par_iter()
+            .map(|&(x0, y0, tw, th)| {
+                let out = render_tile(&tr, opts, x0, y0, tw, th, background);
+                let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+                if opts.progress {
+                    eprint!("\rrendering: {n}/{n_tiles} tiles");
+                }
+                out
+            })
+            .collect()
+    });
+    if opts.progress {
+        eprintln!();
+    }
+    let out_start = Instant::now();
+    let npx = (w as usize) * (h as usize);
+    let mut stats = RenderStats {
+        width: w,
+        height: h,
+        ..RenderStats::default()
+    };
+    let mut color = vec![background; npx];
+    let mut hit_mask = vec![false; npx];
+    let mut depth_t = vec![f64::INFINITY; npx];
+    let mut normals = opts.want_normals.then(|| vec![Rgb([0u8; 3]); npx]);
+    let mut class = opts.want_classify.then(|| vec![Rgb([0u8; 3]); npx]);
+    for t in &outs {
+        stats.merge(&t.stats);
+        for j in 0..t.h {
+            for i in 0..t.w {
+                let src = (j * t.w + i) as usize;
+                let dst = ((t.y0 + j) as usize) * (w as usize) + (t.x0 + i) as usize;
+                color[dst] = t.color[src];
+                depth_t[dst] = t.depth[src];
+                hit_mask[dst] = t.depth[src].is_finite();
+                if let (Some(n), Some(tn)) = (normals.as_mut(), t.normals.as_ref()) {
+                    n[dst] = tn[src];
+                }
+                if let (Some(c), Some(tc)) = (class.as_mut(), t.class.as_ref()) {
+                    c[dst] = tc[src];
+                }
+            }
+        }
+    }
+    stats.pixels_hit = hit_mask.iter().filter(|&&m| m).count() as u64;
+    let image = output::rgb_image(w, h, &color);
+    let depth = opts.want_depth.then(|| output::depth_image(w, h, &depth_t));
+    let normals_img = normals.map(|px| output::rgb_image(w, h, &px));
+    let classify = class.map(|px| output::rgb_image(w, h, &px));
+    stats.output_ms = out_start.elapsed().as_secs_f64() * 1e3;
+    stats.time_ms = start.elapsed().as_secs_f64() * 1e3;
+    Ok(RenderOutput {
+        image,
+        depth,
+        normals: normals_img,
+        classify,
+        hit_mask,
+        depth_t,
+        stats,
+    })
+}
+
+// Whether every object is constant along every ray: the camera is
+// orthographic (one direction d for all rays) and d has an exact zero
+// component on every coordinate an object's function reads (2D models seen
+// along the missing axis). Reads the scene functions' variable use, which
+// simplification can only shrink, so it holds for the evaluators too.
+fn constant_along_rays(cam: &RayCamera, scene: &Scene) -> bool {
+    let one_direction = cam.dx == [0.0; 3] && cam.dy == [0.0; 3];
+    one_direction
+        && scene.objects.iter().all(|o| {
+            let uses = o.function.uses_vars();
+            (0..3).all(|i| !uses[i] || cam.d0[i] == 0.0)
+        })
+}
+
+/// The classification map's colour of a pixel.
+fn class_color(c: Class) -> Rgb<u8> {
+    match c {
+        Class::Outside => Rgb([0, 0, 0]),
+        Class::Background => Rgb([30, 50, 140]),
+        Class::Included => Rgb([40, 180, 70]),
+        Class::Ray => Rgb([210, 60, 40]),
+    }
+}
+
+fn ms_since(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+fn render_tile(
+    tr: &Tracer<'_>,
+    opts: &RenderOptions,
+    x0: u32,
+    y0: u32,
+    tw: u32,
+    th: u32,
+    background: Rgb<u8>,
+) -> TileOut {
+    let mut st = RenderStats::default();
+    let t_trace = Instant::now();
+    let n = (tw * th) as usize;
+    let mut rays: Vec<PixelRay> = Vec::with_capacity(n);
+    let mut slabs = Vec::with_capacity(n);
+    for j in 0..th {
+        for i in 0..tw {
+            let r = tr.cam.pixel_ray(x0 + i, y0 + j);
+            slabs.push(r.slab(&tr.bounds));
+            rays.push(r);
+        }
+    }
+    let mut tile = beam::TileRays {
+        x0,
+        y0,
+        w: tw,
+        rays,
+        slabs,
+        hits: vec![None; n],
+        class: vec![Class::Outside; n],
+        included: Vec::new(),
+    };
+    let method = opts.method;
+    let all: Vec<u32> = (0..tr.evals.len() as u32).collect();
+    match method {
+        Method::Beam => beam::trace_tile(tr, &mut tile, th, &mut st),
+        Method::Pixel | Method::Point { .. } => {
+            for k in 0..n {
+                if let Some((a, b)) = tile.slabs[k] {
+                    let r = tile.rays[k];
+                    tile.hits[k] = match method {
+                        Method::Point { steps } => ray::march(tr, &r, a, b, &all, steps, &mut st),
+                        _ => ray::trace_ray(tr, &r, a, b, &all, &mut st),
+                    };
+                    tile.class[k] = Class::Ray;
+                }
+            }
+        }
+    }
+    for k in 0..n {
+        if tile.slabs[k].is_none() {
+            tile.class[k] = Class::Outside;
+        }
+    }
+    st.trace_cpu_ms += ms_since(t_trace);
+
+    let t_shade = Instant::now();
+    let surfs: Vec<Option<shade::Surf>> = (0..n)
+        .map(|k| {
+            tile.hits[k]
+                .as_ref()
+                .map(|h| shade::surface(tr, &tile.rays[k], h, &mut st))
+        })
+        .collect();
+    st.shade_cpu_ms += ms_since(t_shade);
+
+    // Shadow beams over included blocks.
+    let t_shadow = Instant::now();
+    let nl = tr.lights.len();
+    let mut lit_by_beam = vec![false; n * nl];
+    for &(bx0, by0, bx1, by1) in &tile.included {
+        for (li, light) in tr.lights.iter().enumerate() {
+            if !light.shadows {
+                continue;
+            }
+            let mut members = Vec::new();
+            let mut pts = Vec::new();
+            for j in by0..by1 {
+                for i in bx0..bx1 {
+                    let k = (j * tw + i) as usize;
+                    let Some(s) = surfs[k] else { continue };
+                    let facing = shade::light_dir(tr, light.kind, s.p)
+                        .is_some_and(|(l, _)| camera::dot(s.n, l) > 0.0);
+                    if facing {
+                        members.push(k);
+                        pts.push(s);
+                    }
+                }
+            }
+            if members.len() < 2 {
+                continue;
+            }
+            st.shadow_beams += 1;
+            if shade::shadow_beam(tr, &pts, light.kind, &mut st) {
+                st.shadow_beams_ok += 1;
+                st.shadow_rays_saved += members.len() as u64;
+                for k in members {
+                    lit_by_beam[k * nl + li] = true;
+                }
+            }
+        }
+    }
+    st.shadow_cpu_ms += ms_since(t_shadow);
+
+    let t_shade = Instant::now();
+    let mut color = vec![background; n];
+    let mut normals = opts.want_normals.then(|| vec![Rgb([0u8; 3]); n]);
+    let mut shadow_ms = 0.0;
+    for k in 0..n {
+        if let Some(s) = &surfs[k] {
+            let t0 = Instant::now();
+            let c = shade::shade(tr, s, &lit_by_beam[k * nl..(k + 1) * nl], &mut st);
+            shadow_ms += ms_since(t0);
+            color[k] = output::srgb_pixel(c);
+            if let Some(nv) = normals.as_mut() {
+                nv[k] = output::normal_pixel(Some(s.n));
+            }
+        }
+    }
+    // Per-pixel lighting time is dominated by shadow segments.
+    st.shadow_cpu_ms += shadow_ms;
+    st.shade_cpu_ms += (ms_since(t_shade) - shadow_ms).max(0.0);
+    TileOut {
+        x0,
+        y0,
+        w: tw,
+        h: th,
+        color,
+        depth: tile
+            .hits
+            .iter()
+            .map(|h| h.map_or(f64::INFINITY, |h| h.t))
+            .collect(),
+        normals,
+        class: opts
+            .want_classify
+            .then(|| tile.class.iter().map(|&c| class_color(c)).collect()),
+        stats: st,
+    }
+}

@@ -1,0 +1,407 @@
+//! Screen-to-ray mapping and sound beam hulls.
+//!
+//! A pixel at screen position (X, Y) (pixel units, centres at `i + 0.5`)
+//! owns the ray `p(t) = o(X, Y) + t·d(X, Y)` with `o` and `d` affine in
+//! X and Y. Perspective cameras have constant `o` (the eye), orthographic
+//! ones constant `d`. Either way `p` is multilinear in (X, Y, t), so over a
+//! box X × Y × T it takes its extremes at the 8 corners: the hull of the
+//! corners is the exact hull of the beam. The corners are evaluated with
+//! outward-rounded interval arithmetic, so the hull is sound for the exact
+//! rays defined by the (f64) camera coefficients; single-ray boxes use the
+//! same coefficients, so a ray's boxes and its block's hulls describe the
+//! same real line.
+
+use crate::interval::Interval;
+use crate::scene::{Bounds, Camera, Projection};
+
+/// An interval box in space.
+pub type IBox = [Interval; 3];
+
+/// Why a camera cannot produce rays.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum CameraError {
+    /// `eye == target`, or a coordinate is not finite.
+    EyeIsTarget,
+    /// `up` is zero or parallel to the view direction.
+    UpParallel,
+    /// Field of view outside (0, 180) degrees or a non-positive width.
+    BadProjection,
+    /// Width or height is zero.
+    ZeroSize,
+}
+
+impl std::fmt::Display for CameraError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CameraError::EyeIsTarget => write!(f, "camera eye equals target (no view direction)"),
+            CameraError::UpParallel => {
+                write!(
+                    f,
+                    "camera up vector is zero or parallel to the view direction"
+                )
+            }
+            CameraError::BadProjection => {
+                write!(
+                    f,
+                    "camera fov must be in (0, 180) degrees and width positive"
+                )
+            }
+            CameraError::ZeroSize => write!(f, "image size must be at least 1x1"),
+        }
+    }
+}
+
+/// The affine ray map of a camera for one image size.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct RayCamera {
+    /// Ray origin at screen position (0, 0).
+    pub o0: [f64; 3],
+    /// Change of the origin per pixel in X.
+    pub ox: [f64; 3],
+    /// Change of the origin per pixel in Y.
+    pub oy: [f64; 3],
+    /// Ray direction at screen position (0, 0).
+    pub d0: [f64; 3],
+    /// Change of the direction per pixel in X.
+    pub dx: [f64; 3],
+    /// Change of the direction per pixel in Y.
+    pub dy: [f64; 3],
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    // Pixel spacing in world units at t = 0 and its growth per unit t.
+    spacing0: f64,
+    spacing_per_t: f64,
+}
+
+pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+pub(crate) fn norm(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}
+pub(crate) fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+pub(crate) fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+pub(crate) fn normalize(a: [f64; 3]) -> Option<[f64; 3]> {
+    let n = norm(a);
+    (n.is_finite() && n > 0.0).then(|| scale(a, 1.0 / n))
+}
+
+/// The point interval of each coordinate.
+pub fn point_box(p: [f64; 3]) -> IBox {
+    p.map(Interval::point)
+}
+
+/// The smallest box holding both boxes.
+pub fn box_hull(a: IBox, b: IBox) -> IBox {
+    std::array::from_fn(|i| Interval::new(a[i].lo.min(b[i].lo), a[i].hi.max(b[i].hi)))
+}
+
+/// `a ∩ b`, or `None` when they do not meet.
+pub fn box_meet(a: IBox, b: IBox) -> Option<IBox> {
+    let mut out = a;
+    for i in 0..3 {
+        let lo = a[i].lo.max(b[i].lo);
+        let hi = a[i].hi.min(b[i].hi);
+        if lo.is_nan() || hi.is_nan() || lo > hi {
+            return None;
+        }
+        out[i] = Interval::new(lo, hi);
+    }
+    Some(out)
+}
+
+/// The scene bounds as a box.
+pub fn bounds_box(b: &Bounds) -> IBox {
+    std::array::from_fn(|i| Interval::new(b.min[i], b.max[i]))
+}
+
+/// `o + t·d` for interval operands.
+pub fn ray_box(o: IBox, d: IBox, t: Interval) -> IBox {
+    std::array::from_fn(|i| o[i].add(t.mul(d[i])))
+}
+
+impl RayCamera {
+    /// The ray map of `cam` for a `width × height` image.
+    pub fn new(cam: &Camera, width: u32, height: u32) -> Result<RayCamera, CameraError> {
+        if width == 0 || height == 0 {
+            return Err(CameraError::ZeroSize);
+        }
+        let finite = |v: [f64; 3]| v.iter().all(|c| c.is_finite());
+        if !finite(cam.eye) || !finite(cam.target) || !finite(cam.up) {
+            return Err(CameraError::EyeIsTarget);
+        }
+        let w = normalize(sub(cam.target, cam.eye)).ok_or(CameraError::EyeIsTarget)?;
+        let up = normalize(cam.up).ok_or(CameraError::UpParallel)?;
+        let side = cross(w, up);
+        // A relative threshold: an up vector within ~0.06° of the view
+        // direction gives a basis too ill-conditioned to be meaningful.
+        if norm(side) < 1e-6 {
+            return Err(CameraError::UpParallel);
+        }
+        let u = normalize(side).ok_or(CameraError::UpParallel)?;
+        let v = cross(u, w);
+        let (wf, hf) = (width as f64, height as f64);
+        let aspect = wf / hf;
+        let zero = [0.0; 3];
+        match cam.projection {
+            Projection::Perspective { fov_deg } => {
+                if !(fov_deg > 0.0 && fov_deg < 180.0) {
+                    return Err(CameraError::BadProjection);
+                }
+                let hh = (fov_deg.to_radians() * 0.5).tan();
+                let hw = hh * aspect;
+                let d0 = add(sub(w, scale(u, hw)), scale(v, hh));
+                let dx = scale(u, 2.0 * hw / wf);
+                let dy = scale(v, -2.0 * hh / hf);
+                Ok(RayCamera {
+                    o0: cam.eye,
+                    ox: zero,
+                    oy: zero,
+                    d0,
+                    dx,
+                    dy,
+                    width,
+                    height,
+                    spacing0: 0.0,
+                    spacing_per_t: norm(dx).max(norm(dy)),
+                })
+            }
+            Projection::Orthographic { width: vw } => {
+                if !(vw > 0.0 && vw.is_finite()) {
+                    return Err(CameraError::BadProjection);
+                }
+                let hw = vw * 0.5;
+                let hh = hw / aspect;
+                let o0 = add(sub(cam.eye, scale(u, hw)), scale(v, hh));
+                let ox = scale(u, 2.0 * hw / wf);
+                let oy = scale(v, -2.0 * hh / hf);
+                Ok(RayCamera {
+                    o0,
+                    ox,
+                    oy,
+                    d0: w,
+                    dx: zero,
+                    dy: zero,
+                    width,
+                    height,
+                    spacing0: norm(ox).max(norm(oy)),
+                    spacing_per_t: 0.0,
+                })
+            }
+        }
+    }
+
+    /// Enclosures of the origin and direction of the ray at screen (x, y).
+    pub fn ray_at(&self, x: f64, y: f64) -> (IBox, IBox) {
+        let (xi, yi) = (Interval::point(x), Interval::point(y));
+        let aff = |c: [f64; 3], cx: [f64; 3], cy: [f64; 3]| -> IBox {
+            std::array::from_fn(|i| {
+                Interval::point(c[i])
+                    .add(xi.mul(Interval::point(cx[i])))
+                    .add(yi.mul(Interval::point(cy[i])))
+            })
+        };
+        (
+            aff(self.o0, self.ox, self.oy),
+            aff(self.d0, self.dx, self.dy),
+        )
+    }
+
+    /// Origin and direction of the ray through the centre of pixel (i, j),
+    /// as enclosures and as f64 midpoints.
+    pub fn pixel_ray(&self, i: u32, j: u32) -> PixelRay {
+        let (o, d) = self.ray_at(i as f64 + 0.5, j as f64 + 0.5);
+        PixelRay {
+            o,
+            d,
+            om: o.map(|c| c.mid()),
+            dm: d.map(|c| c.mid()),
+        }
+    }
+
+    /// A sound hull of every ray point with screen x ∈ `xs`, y ∈ `ys`
+    /// and parameter t ∈ `t` (from the 8 corners, see the module doc).
+    pub fn hull(&self, xs: (f64, f64), ys: (f64, f64), t: Interval) -> IBox {
+        self.corners(xs, ys).hull(t)
+    }
+
+    /// The corner rays of the screen rectangle `xs × ys`, for repeated
+    /// hulls over different T.
+    pub fn corners(&self, xs: (f64, f64), ys: (f64, f64)) -> CornerRays {
+        CornerRays([
+            self.ray_at(xs.0, ys.0),
+            self.ray_at(xs.1, ys.0),
+            self.ray_at(xs.0, ys.1),
+            self.ray_at(xs.1, ys.1),
+        ])
+    }
+
+    /// Distance between neighbouring pixel rays at parameter t, world units.
+    pub fn spacing(&self, t: f64) -> f64 {
+        self.spacing0 + t.max(0.0) * self.spacing_per_t
+    }
+
+    /// The depth tolerance at parameter t: a quarter of the pixel spacing
+    /// (in t units; |d| ≥ 1, so the world error is at most
+    /// `tolerance · |d|`), never below a tiny absolute floor.
+    pub fn tolerance(&self, t: f64) -> f64 {
+        (0.25 * self.spacing(t)).max(1e-9)
+    }
+}
+
+/// Enclosures of the origin and direction of a block's four corner rays.
+#[derive(Copy, Clone, Debug)]
+pub struct CornerRays(pub [(IBox, IBox); 4]);
+
+impl CornerRays {
+    /// A sound hull of the block's ray points for t ∈ `t`.
+    pub fn hull(&self, t: Interval) -> IBox {
+        let mut out = ray_box(self.0[0].0, self.0[0].1, Interval::point(t.lo));
+        for (o, d) in &self.0 {
+            for tc in [t.lo, t.hi] {
+                out = box_hull(out, ray_box(*o, *d, Interval::point(tc)));
+            }
+        }
+        out
+    }
+}
+
+/// One pixel's ray.
+#[derive(Copy, Clone, Debug)]
+pub struct PixelRay {
+    /// Enclosure of the origin.
+    pub o: IBox,
+    /// Enclosure of the direction.
+    pub d: IBox,
+    /// Origin midpoint (for point evaluation).
+    pub om: [f64; 3],
+    /// Direction midpoint.
+    pub dm: [f64; 3],
+}
+
+impl PixelRay {
+    /// The f64 point at parameter t (for point evaluation and shading).
+    pub fn at(&self, t: f64) -> [f64; 3] {
+        add(self.om, scale(self.dm, t))
+    }
+
+    /// The parameter range inside `b` (slab test), widened a little so it
+    /// covers the exact range despite rounding, clipped to t ≥ 0; `None`
+    /// when the ray misses the box.
+    pub fn slab(&self, b: &Bounds) -> Option<(f64, f64)> {
+        let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+        for i in 0..3 {
+            let (o, d) = (self.om[i], self.dm[i]);
+            if d == 0.0 {
+                if o < b.min[i] || o > b.max[i] {
+                    return None;
+                }
+                continue;
+            }
+            let a = (b.min[i] - o) / d;
+            let c = (b.max[i] - o) / d;
+            let (lo, hi) = if a < c { (a, c) } else { (c, a) };
+            t0 = t0.max(lo - 1e-9 * (1.0 + lo.abs()));
+            t1 = t1.min(hi + 1e-9 * (1.0 + hi.abs()));
+        }
+        (t0 <= t1 && t1.is_finite()).then_some((t0, t1))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cams() -> Vec<Camera> {
+        vec![
+            Camera::default(),
+            Camera {
+                eye: [0.3, -4.0, 1.0],
+                target: [0.1, 0.2, -0.3],
+                up: [0.0, 0.0, 1.0],
+                projection: Projection::Orthographic { width: 3.0 },
+            },
+        ]
+    }
+
+    #[test]
+    fn every_pixel_ray_point_lies_in_its_block_hull() {
+        for cam in cams() {
+            let rc = RayCamera::new(&cam, 37, 23).unwrap();
+            let (x0, x1, y0, y1) = (3u32, 11u32, 5u32, 9u32);
+            let t = Interval::new(1.25, 6.5);
+            let h = rc.hull(
+                (x0 as f64 + 0.5, x1 as f64 - 0.5),
+                (y0 as f64 + 0.5, y1 as f64 - 0.5),
+                t,
+            );
+            for i in x0..x1 {
+                for j in y0..y1 {
+                    let r = rc.pixel_ray(i, j);
+                    for k in 0..=16 {
+                        let tk = t.lo + (t.hi - t.lo) * k as f64 / 16.0;
+                        let p = r.at(tk);
+                        let b = ray_box(r.o, r.d, Interval::point(tk));
+                        for c in 0..3 {
+                            assert!(h[c].contains(p[c]), "{cam:?} {i} {j} {tk} {c}");
+                            assert!(h[c].lo <= b[c].lo && b[c].hi <= h[c].hi);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn centre_ray_looks_at_target() {
+        let rc = RayCamera::new(&Camera::default(), 64, 64).unwrap();
+        let (_, d) = rc.ray_at(32.0, 32.0);
+        let dm = d.map(|c| c.mid());
+        let w = normalize(sub([0.0; 3], Camera::default().eye)).unwrap();
+        let n = normalize(dm).unwrap();
+        assert!((dot(n, w) - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn degenerate_cameras_are_errors() {
+        let mut c = Camera::default();
+        c.target = c.eye;
+        assert_eq!(RayCamera::new(&c, 8, 8), Err(CameraError::EyeIsTarget));
+        let mut c = Camera::default();
+        c.up = sub(c.target, c.eye);
+        assert_eq!(RayCamera::new(&c, 8, 8), Err(CameraError::UpParallel));
+        assert_eq!(
+            RayCamera::new(&Camera::default(), 0, 8),
+            Err(CameraError::ZeroSize)
+        );
+    }
+
+    #[test]
+    fn slab_is_inside_bounds() {
+        let rc = RayCamera::new(&Camera::default(), 16, 16).unwrap();
+        let b = Bounds::default();
+        let r = rc.pixel_ray(8, 8);
+        let (t0, t1) = r.slab(&b).unwrap();
+        assert!(t0 > 0.0 && t1 > t0);
+        for t in [t0 + 1e-6, 0.5 * (t0 + t1), t1 - 1e-6] {
+            let p = r.at(t);
+            assert!(p.iter().all(|c| c.abs() <= 2.0 + 1e-6));
+        }
+    }
+}

@@ -1,0 +1,486 @@
+//! One ray: guaranteed first-root isolation, bracketed refinement, and the
+//! fixed-step point march baseline.
+//!
+//! # First-root policy
+//! The ray's range [t0, t1] is bisected front to back. A piece is dropped
+//! when for every live object the interval over the piece's box, or the
+//! centred form along the ray (F(p(m)) + (∇F·d)·([a, b] − m)), is strictly
+//! positive (or empty: f undefined there). Where one object alone may
+//! vanish on a piece, interval Newton (dF/dt = ∇F·d from `interval_grad`)
+//! shrinks the piece or drops it, and a piece on which that object is
+//! proven monotone with proven opposite signs at its ends holds exactly one
+//! root, which is refined on the point evaluator (Illinois). A piece
+//! narrower than the depth tolerance on which 0 ∈ F counts as a hit even
+//! without a sign change: this is how tangential contacts and double roots
+//! (f = g², which never changes sign) are drawn, at the cost of surfaces
+//! within about a tolerance of a ray being drawn as touched. A ray whose
+//! start point has f < 0 (point evaluation) hits at t0: cut-away views of
+//! solids clipped by the bounds, and filled masks for 2D functions.
+
+use super::camera::{IBox, PixelRay, ray_box};
+use super::{Hit, Tracer};
+use crate::interval::Interval;
+use crate::render::stats::RenderStats;
+
+// Caps that keep a pathological function from stalling a render; reaching
+// one counts as a hit at the current piece (never a silent miss).
+const MAX_RAY_STEPS: usize = 20_000;
+const MAX_REFINE_STEPS: usize = 200;
+
+/// The smallest live-object value at `p` and the object attaining it.
+pub(crate) fn scene_point(
+    tr: &Tracer<'_>,
+    live: &[u32],
+    p: [f64; 3],
+    st: &mut RenderStats,
+) -> (f64, usize) {
+    let mut best = (f64::INFINITY, live.first().copied().unwrap_or(0) as usize);
+    for &k in live {
+        let v = tr.point(k as usize, p, st);
+        if v < best.0 {
+            best = (v, k as usize);
+        }
+    }
+    best
+}
+
+/// Finds a root of `f` in [a, b] with `f(a) > 0 >= f(b)` to within `tol`
+/// (Illinois false position, with a bisection step every fourth iteration
+/// so the bracket always shrinks).
+pub(crate) fn illinois(
+    mut f: impl FnMut(f64) -> f64,
+    mut a: f64,
+    mut b: f64,
+    mut fa: f64,
+    mut fb: f64,
+    tol: f64,
+) -> f64 {
+    let mut side = 0i8;
+    for it in 0..MAX_REFINE_STEPS {
+        if b - a <= tol {
+            break;
+        }
+        let mut c = if it % 4 == 3 || !(fa - fb).is_finite() || fa == fb {
+            0.5 * (a + b)
+        } else {
+            b - fb * (b - a) / (fb - fa)
+        };
+        if !(c > a && c < b) {
+            c = 0.5 * (a + b);
+        }
+        let fc = f(c);
+        if fc.is_nan() {
+            // Undefined inside the bracket: shrink towards the front end.
+            b = c;
+            continue;
+        }
+        if fc > 0.0 {
+            a = c;
+            fa = fc;
+            if side == 1 {
+                fb *= 0.5;
+            }
+            side = 1;
+        } else {
+            b = c;
+            fb = fc;
+            if side == -1 {
+                fa *= 0.5;
+            }
+            side = -1;
+        }
+    }
+    0.5 * (a + b)
+}
+
+/// Refines the first root of the scene function on the pixel's ray in the
+/// bracket [a, b] (f(a) > 0 ≥ f(b) expected), returning the hit.
+pub(crate) fn refine(
+    tr: &Tracer<'_>,
+    ray: &PixelRay,
+    live: &[u32],
+    a: f64,
+    b: f64,
+    st: &mut RenderStats,
+) -> Option<Hit> {
+    let fa = scene_point(tr, live, ray.at(a), st).0;
+    let fb = scene_point(tr, live, ray.at(b), st).0;
+    if !(fa > 0.0 && fb <= 0.0) {
+        return None;
+    }
+    let tol = tr.cam.tolerance(a);
+    let mut evals = 0u64;
+    let t = illinois(
+        |t| {
+            evals += live.len() as u64;
+            let p = ray.at(t);
+            live.iter()
+                .map(|&k| tr.evals[k as usize].point(p))
+                .fold(f64::INFINITY, f64::min)
+        },
+        a,
+        b,
+        fa,
+        fb,
+        tol,
+    );
+    st.point_evals += evals;
+    let obj = scene_point(tr, live, ray.at(t), st).1;
+    Some(Hit {
+        t,
+        obj,
+        inside: false,
+    })
+}
+
+/// Point test of the start: a ray that begins inside a solid hits at t0.
+pub(crate) fn starts_inside(
+    tr: &Tracer<'_>,
+    ray: &PixelRay,
+    live: &[u32],
+    t0: f64,
+    st: &mut RenderStats,
+) -> Option<Hit> {
+    let (v, obj) = scene_point(tr, live, ray.at(t0), st);
+    (v < 0.0).then_some(Hit {
+        t: t0,
+        obj,
+        inside: true,
+    })
+}
+
+/// Guaranteed first-root isolation on one ray over [t0, t1] (policy in
+/// the module doc).
+pub(crate) fn trace_ray(
+    tr: &Tracer<'_>,
+    ray: &PixelRay,
+    t0: f64,
+    t1: f64,
+    live: &[u32],
+    st: &mut RenderStats,
+) -> Option<Hit> {
+    st.rays += 1;
+    if live.is_empty() {
+        return None;
+    }
+    if let Some(h) = starts_inside(tr, ray, live, t0, st) {
+        return Some(h);
+    }
+    let mut stack: Vec<(f64, f64)> = vec![(t0, t1)];
+    let mut cand: Vec<(u32, Interval)> = Vec::with_capacity(live.len());
+    let mut steps = 0usize;
+    while let Some((a, b)) = stack.pop() {
+        steps += 1;
+        let bx = ray_box(ray.o, ray.d, Interval::new(a, b));
+        cand.clear();
+        for &k in live {
+            let f = tr.interval(k as usize, bx, st);
+            if !f.is_empty() && f.lo <= 0.0 && !centred_positive(tr, ray, k as usize, bx, a, b, st)
+            {
+                cand.push((k, f));
+            }
+        }
+        if cand.is_empty() {
+            continue;
+        }
+        let tol = tr.cam.tolerance(a);
+        if b - a <= tol || steps >= MAX_RAY_STEPS {
+            return Some(narrow_hit(tr, ray, live, a, b, st));
+        }
+        if cand.len() == 1 {
+            let k = cand[0].0 as usize;
+            match newton(tr, ray, k, a, b, st) {
+                Newton::Empty => continue,
+                Newton::Unique(na, nb) => {
+                    if let Some(h) = refine(tr, ray, live, na, nb, st) {
+                        return Some(h);
+                    }
+                    // Point signs disagree with the proof at the limits of
+                    // precision: treat as a narrow piece.
+                    return Some(narrow_hit(tr, ray, live, na, nb, st));
+                }
+                Newton::Shrunk(na, nb) if nb - na < 0.5 * (b - a) => {
+                    stack.push((na, nb));
+                    continue;
+                }
+                Newton::Shrunk(na, nb) => {
+                    let m = 0.5 * (na + nb);
+                    stack.push((m, nb));
+                    stack.push((na, m));
+                    continue;
+                }
+            }
+        }
+        let m = 0.5 * (a + b);
+        stack.push((m, b));
+        stack.push((a, m));
+    }
+    None
+}
+
+// The centred form along the ray: f(p(t)) ∈ F(p(m)) + (∇F(box)·d)·([a, b] − m)
+// for t ∈ [a, b]. One-dimensional, it ignores the box's extent across the
+// ray, which makes the natural extension of a grazing segment's box
+// straddle 0 while the segment stays clear. True if it proves f > 0.
+// Sound under the same gradient-enclosure assumption as interval Newton.
+fn centred_positive(
+    tr: &Tracer<'_>,
+    ray: &PixelRay,
+    k: usize,
+    bx: IBox,
+    a: f64,
+    b: f64,
+    st: &mut RenderStats,
+) -> bool {
+    let g = tr.interval_grad(k, bx, st);
+    let dfdt = (0..3).fold(Interval::point(0.0), |acc, i| acc.add(g.d[i].mul(ray.d[i])));
+    if dfdt.is_empty() || !dfdt.lo.is_finite() || !dfdt.hi.is_finite() {
+        return false;
+    }
+    let m = 0.5 * (a + b);
+    let fm = tr.interval(k, ray_box(ray.o, ray.d, Interval::point(m)), st);
+    if fm.is_empty() {
+        return false;
+    }
+    let off = Interval::new(a, b).sub(Interval::point(m));
+    fm.add(dfdt.mul(off)).lo > 0.0
+}
+
+// A narrow piece with 0 ∈ F: refine a sign change if the ends show one,
+// else the front of the piece is the hit (tangency policy).
+fn narrow_hit(
+    tr: &Tracer<'_>,
+    ray: &PixelRay,
+    live: &[u32],
+    a: f64,
+    b: f64,
+    st: &mut RenderStats,
+) -> Hit {
+    if let Some(h) = refine(tr, ray, live, a, b, st) {
+        return h;
+    }
+    let obj = scene_point(tr, live, ray.at(a), st).1;
+    Hit {
+        t: a,
+        obj,
+        inside: false,
+    }
+}
+
+enum Newton {
+    /// No root of the object in the piece.
+    Empty,
+    /// Exactly one root, in this bracket (proven signs, monotone).
+    Unique(f64, f64),
+    /// The roots, if any, lie in this sub-piece.
+    Shrunk(f64, f64),
+}
+
+// One interval Newton step for object k on [a, b].
+fn newton(
+    tr: &Tracer<'_>,
+    ray: &PixelRay,
+    k: usize,
+    a: f64,
+    b: f64,
+    st: &mut RenderStats,
+) -> Newton {
+    let bx = ray_box(ray.o, ray.d, Interval::new(a, b));
+    let g = tr.interval_grad(k, bx, st);
+    let mut dfdt = Interval::point(0.0);
+    for i in 0..3 {
+        dfdt = dfdt.add(g.d[i].mul(ray.d[i]));
+    }
+    if dfdt.is_empty() || dfdt.contains(0.0) || !dfdt.lo.is_finite() || !dfdt.hi.is_finite() {
+        return Newton::Shrunk(a, b);
+    }
+    let m = 0.5 * (a + b);
+    let fm = tr.interval(k, ray_box(ray.o, ray.d, Interval::point(m)), st);
+    if fm.is_empty() {
+        return Newton::Shrunk(a, b);
+    }
+    let n = Interval::point(m).sub(fm.div(dfdt));
+    let (na, nb) = (a.max(n.lo), b.min(n.hi));
+    if na.partial_cmp(&nb).is_none_or(|o| o.is_gt()) {
+        return Newton::Empty;
+    }
+    let fa = tr.interval(k, ray_box(ray.o, ray.d, Interval::point(na)), st);
+    let fb = tr.interval(k, ray_box(ray.o, ray.d, Interval::point(nb)), st);
+    if fa.lo > 0.0 && fb.lo > 0.0 || fa.hi < 0.0 && fb.hi < 0.0 {
+        // Monotone with one strict sign at both ends: no root. (A negative
+        // start cannot follow rejected pieces except at the ray start,
+        // which `starts_inside` handled.)
+        return Newton::Empty;
+    }
+    if fa.lo > 0.0 && fb.hi < 0.0 {
+        return Newton::Unique(na, nb);
+    }
+    Newton::Shrunk(na, nb)
+}
+
+/// The baseline: `steps` equal steps of point evaluation over [t0, t1];
+/// the first sign change is refined by Illinois.
+pub(crate) fn march(
+    tr: &Tracer<'_>,
+    ray: &PixelRay,
+    t0: f64,
+    t1: f64,
+    live: &[u32],
+    steps: u32,
+    st: &mut RenderStats,
+) -> Option<Hit> {
+    st.rays += 1;
+    if let Some(h) = starts_inside(tr, ray, live, t0, st) {
+        return Some(h);
+    }
+    let n = steps.max(1);
+    let mut prev_t = t0;
+    for i in 1..=n {
+        let t = if i == n {
+            t1
+        } else {
+            t0 + (t1 - t0) * f64::from(i) / f64::from(n)
+        };
+        let (v, _) = scene_point(tr, live, ray.at(t), st);
+        if v <= 0.0 {
+            let obj = scene_point(tr, live, ray.at(t), st).1;
+            return refine(tr, ray, live, prev_t, t, st).or(Some(Hit {
+                t,
+                obj,
+                inside: false,
+            }));
+        }
+        prev_t = t;
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::eval::{Evaluator, Grad, IntervalGrad};
+    use crate::render::camera::{RayCamera, point_box};
+    use crate::scene::{Bounds, Camera};
+    use std::sync::Arc;
+
+    /// A function of x alone, with its interval extension and derivative.
+    struct OfX {
+        f: fn(f64) -> f64,
+        df: fn(f64) -> f64,
+        fi: fn(Interval) -> Interval,
+        dfi: fn(Interval) -> Interval,
+    }
+
+    impl Evaluator for OfX {
+        fn point(&self, p: [f64; 3]) -> f64 {
+            (self.f)(p[0])
+        }
+        fn point_grad(&self, p: [f64; 3]) -> Grad {
+            Grad {
+                v: (self.f)(p[0]),
+                d: [(self.df)(p[0]), 0.0, 0.0],
+            }
+        }
+        fn interval(&self, b: [Interval; 3]) -> Interval {
+            (self.fi)(b[0])
+        }
+        fn interval_grad(&self, b: [Interval; 3]) -> IntervalGrad {
+            let z = Interval::point(0.0);
+            IntervalGrad {
+                v: (self.fi)(b[0]),
+                d: [(self.dfi)(b[0]), z, z],
+            }
+        }
+    }
+
+    // Traces the ray x = -2 + t (t in [0, 4]) through `e`.
+    fn trace(e: OfX) -> (Option<Hit>, RenderStats, f64) {
+        let evals: Vec<Arc<dyn Evaluator>> = vec![Arc::new(e)];
+        let tr = Tracer {
+            cam: RayCamera::new(&Camera::default(), 64, 64).unwrap(),
+            evals: &evals,
+            colors: vec![[1.0; 3]],
+            lights: &[],
+            bounds: Bounds::default(),
+            diag: 7.0,
+            flat: false,
+        };
+        let (o, d) = ([-2.0, 0.0, 0.0], [1.0, 0.0, 0.0]);
+        let ray = PixelRay {
+            o: point_box(o),
+            d: point_box(d),
+            om: o,
+            dm: d,
+        };
+        let mut st = RenderStats::default();
+        let hit = trace_ray(&tr, &ray, 0.0, 4.0, &[0], &mut st);
+        (hit, st, tr.cam.tolerance(2.5))
+    }
+
+    fn h(v: f64) -> Interval {
+        Interval::point(v)
+    }
+
+    #[test]
+    fn illinois_converges_within_tolerance() {
+        let t = illinois(|t| 2.0 - t * t, 0.0, 2.0, 2.0, -2.0, 1e-10);
+        assert!((t - 2f64.sqrt()).abs() <= 1e-10);
+    }
+
+    #[test]
+    fn a_simple_root_is_proven_by_newton_quickly() {
+        let (hit, st, tol) = trace(OfX {
+            f: |x| 0.5 - x,
+            df: |_| -1.0,
+            fi: |x| h(0.5).sub(x),
+            dfi: |_| h(-1.0),
+        });
+        let hit = hit.unwrap();
+        assert!(!hit.inside);
+        assert!((hit.t - 2.5).abs() <= tol);
+        assert!(st.interval_evals < 20, "{}", st.interval_evals);
+    }
+
+    #[test]
+    fn a_double_root_counts_as_a_hit_at_the_tangency() {
+        // (x - 0.5)² touches 0 at x = 0.5 and never changes sign.
+        let (hit, _, tol) = trace(OfX {
+            f: |x| (x - 0.5) * (x - 0.5),
+            df: |x| 2.0 * (x - 0.5),
+            fi: |x| x.sub(h(0.5)).square(),
+            dfi: |x| h(2.0).mul(x.sub(h(0.5))),
+        });
+        let hit = hit.unwrap();
+        assert!((hit.t - 2.5).abs() <= tol, "{} vs 2.5 ± {tol}", hit.t);
+    }
+
+    #[test]
+    fn a_positive_function_has_no_hit() {
+        let (hit, st, _) = trace(OfX {
+            f: |x| x * x + 0.01,
+            df: |x| 2.0 * x,
+            fi: |x| x.square().add(h(0.01)),
+            dfi: |x| h(2.0).mul(x),
+        });
+        assert_eq!(hit, None);
+        assert_eq!(st.rays, 1);
+    }
+
+    #[test]
+    fn a_ray_starting_inside_hits_at_its_start() {
+        let (hit, _, _) = trace(OfX {
+            f: |x| x - 5.0,
+            df: |_| 1.0,
+            fi: |x| x.sub(h(5.0)),
+            dfi: |_| h(1.0),
+        });
+        assert_eq!(
+            hit,
+            Some(Hit {
+                t: 0.0,
+                obj: 0,
+                inside: true
+            })
+        );
+    }
+}

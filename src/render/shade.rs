@@ -1,0 +1,290 @@
+//! Shading (Lambert + Blinn-Phong + ambient, linear light) and guaranteed
+//! shadows.
+//!
+//! # Shadows
+//! A point is lit by a shadow-casting light only if the segment from it to
+//! the light is proven free of surface. The segment starts at
+//! `q = p + ε·n` (n the outward unit gradient) with
+//! `ε = max(1e-4 · bounds diagonal, 2 · depth tolerance · |d|)`, so `q` is
+//! off the surface even with the depth error of the hit. The segment (for a
+//! directional light: up to twice the bounds diagonal, then clipped to the
+//! bounds, outside which there is no surface) is bisected; a piece is free
+//! when every object's interval over it (clipped to the bounds) is strictly
+//! positive, or when every object that may vanish there is proven
+//! increasing along the segment (interval gradient · segment direction > 0)
+//! and every object is proven positive at the piece's start (at q: an
+//! interval test of q; further on: the previous piece was proven positive
+//! up to its end inside the bounds). A piece shorter than ε/2
+//! that is not free, or an exhausted budget, means shadow.
+//!
+//! For an included block, one shadow beam first tests all its hit points
+//! at once: the box Q of their q points replaces the single point, and the
+//! same test over `Q + s·(L − Q)` proves the whole block lit (counted in
+//! `shadow_rays_saved`); only if it fails does each pixel test its own
+//! segment. Lights with `shadows: false` run no shadow code.
+
+use super::Tracer;
+use super::camera::{
+    IBox, add, bounds_box, box_hull, box_meet, dot, normalize, point_box, scale, sub,
+};
+use crate::interval::Interval;
+use crate::render::stats::RenderStats;
+use crate::scene::LightKind;
+
+/// Ambient light, as a fraction of the object colour.
+pub const AMBIENT: f64 = 0.1;
+/// Specular strength (white highlights).
+pub const SPECULAR: f64 = 0.25;
+/// Blinn-Phong exponent.
+pub const SHININESS: i32 = 32;
+
+const MAX_SHADOW_PIECES: usize = 4000;
+
+/// The far end of a shadow segment.
+#[derive(Copy, Clone, Debug)]
+pub(crate) enum SegEnd {
+    /// A point light's position.
+    Point([f64; 3]),
+    /// A fixed offset from the start (directional light).
+    Offset([f64; 3]),
+}
+
+/// The unit direction from `p` towards the light, and the segment end.
+pub(crate) fn light_dir(
+    tr: &Tracer<'_>,
+    kind: LightKind,
+    p: [f64; 3],
+) -> Option<([f64; 3], SegEnd)> {
+    match kind {
+        LightKind::Point(l) => {
+            let d = normalize(sub(l, p))?;
+            Some((d, SegEnd::Point(l)))
+        }
+        LightKind::Directional(dir) => {
+            let d = normalize(scale(dir, -1.0))?;
+            Some((d, SegEnd::Offset(scale(d, 2.0 * tr.diag))))
+        }
+    }
+}
+
+/// Whether every segment from a point of `q` to `end` is proven free of
+/// surface. `starts` are the segments' start points (all inside `q`);
+/// they are proven outside every object only if the monotonicity test on
+/// the first piece needs it (one interval evaluation per point and object).
+pub(crate) fn segment_free(
+    tr: &Tracer<'_>,
+    q: IBox,
+    starts: &[[f64; 3]],
+    end: SegEnd,
+    min_w: f64,
+    st: &mut RenderStats,
+) -> bool {
+    let delta: IBox = match end {
+        SegEnd::Point(l) => std::array::from_fn(|i| Interval::point(l[i]).sub(q[i])),
+        SegEnd::Offset(o) => point_box(o),
+    };
+    let len = delta
+        .iter()
+        .map(|c| c.lo.abs().max(c.hi.abs()))
+        .map(|m| m * m)
+        .sum::<f64>()
+        .sqrt();
+    let bounds = bounds_box(&tr.bounds);
+    let n = tr.evals.len();
+    let mut stack = vec![(0.0f64, 1.0f64)];
+    let mut pieces = 0usize;
+    // Pieces are settled front to back and contiguously, so when a piece
+    // is popped everything before it is free; `front_ok` says, in
+    // addition, that every object is proven positive at the piece's start
+    // on every segment (None at s = 0 until the start points are checked).
+    let mut front_ok: Option<bool> = None;
+    while let Some((a, c)) = stack.pop() {
+        pieces += 1;
+        if pieces > MAX_SHADOW_PIECES {
+            return false;
+        }
+        let s = Interval::new(a, c);
+        let bx: IBox = std::array::from_fn(|i| q[i].add(s.mul(delta[i])));
+        let Some(clip) = box_meet(bx, bounds) else {
+            // Wholly outside the bounds: no surface, but nothing known of f.
+            front_ok = Some(false);
+            continue;
+        };
+        let inside_bounds = clip == bx;
+        let mut maybe: Vec<usize> = Vec::new();
+        for k in 0..n {
+            let f = tr.interval(k, clip, st);
+            if !(f.is_empty() || f.lo > 0.0) {
+                maybe.push(k);
+            }
+        }
+        if maybe.is_empty() {
+            front_ok = Some(inside_bounds);
+            continue;
+        }
+        // Positive at the start and increasing along every segment over
+        // the piece: positive on the whole piece.
+        let ok = match front_ok {
+            Some(v) => v,
+            None => {
+                let v = starts.iter().all(|&p| start_state(tr, p, st) == Some(true));
+                front_ok = Some(v);
+                v
+            }
+        };
+        if ok {
+            let increasing = maybe.iter().all(|&k| {
+                let g = tr.interval_grad(k, bx, st);
+                let dd =
+                    g.d.iter()
+                        .zip(&delta)
+                        .fold(Interval::point(0.0), |acc, (gi, di)| acc.add(gi.mul(*di)));
+                dd.lo > 0.0
+            });
+            if increasing {
+                front_ok = Some(inside_bounds);
+                continue;
+            }
+        }
+        if (c - a) * len <= min_w {
+            return false;
+        }
+        let m = 0.5 * (a + c);
+        stack.push((m, c));
+        stack.push((a, m));
+    }
+    true
+}
+
+/// Whether the point q is proven outside every object (Some(true)),
+/// proven inside one (Some(false)), or undecided (None).
+pub(crate) fn start_state(tr: &Tracer<'_>, q: [f64; 3], st: &mut RenderStats) -> Option<bool> {
+    let b = point_box(q);
+    let mut all_pos = true;
+    for k in 0..tr.evals.len() {
+        let f = tr.interval(k, b, st);
+        if f.hi < 0.0 {
+            return Some(false);
+        }
+        if !(f.is_empty() || f.lo > 0.0) {
+            all_pos = false;
+        }
+    }
+    all_pos.then_some(true)
+}
+
+/// The geometry of one hit pixel, ready for shading.
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct Surf {
+    /// Hit point.
+    pub p: [f64; 3],
+    /// Unit normal facing the viewer.
+    pub n: [f64; 3],
+    /// Shadow segment start.
+    pub q: [f64; 3],
+    /// Unit vector towards the eye.
+    pub v: [f64; 3],
+    /// Shadow segment resolution (world units).
+    pub min_w: f64,
+    /// Object colour.
+    pub color: [f64; 3],
+}
+
+/// Surface geometry at a hit (normal from the point gradient).
+pub(crate) fn surface(
+    tr: &Tracer<'_>,
+    ray: &super::camera::PixelRay,
+    hit: &super::Hit,
+    st: &mut RenderStats,
+) -> Surf {
+    let p = ray.at(hit.t);
+    let dn = normalize(ray.dm).unwrap_or([0.0, 0.0, 1.0]);
+    let v = scale(dn, -1.0);
+    let dlen = super::camera::norm(ray.dm);
+    let eps = (1e-4 * tr.diag).max(2.0 * tr.cam.tolerance(hit.t) * dlen);
+    let color = tr.colors[hit.obj];
+    if hit.inside {
+        // A cut face at the bounds: face the viewer, start shadows in front.
+        return Surf {
+            p,
+            n: v,
+            q: add(p, scale(v, eps)),
+            v,
+            min_w: 0.5 * eps,
+            color,
+        };
+    }
+    let g = tr.point_grad(hit.obj, p, st);
+    let nout = normalize(g.d).unwrap_or(v);
+    let n = if dot(nout, v) < 0.0 {
+        scale(nout, -1.0)
+    } else {
+        nout
+    };
+    Surf {
+        p,
+        n,
+        q: add(p, scale(nout, eps)),
+        v,
+        min_w: 0.5 * eps,
+        color,
+    }
+}
+
+/// Tests one shadow beam for a set of surface points and one light.
+pub(crate) fn shadow_beam(
+    tr: &Tracer<'_>,
+    surfs: &[Surf],
+    kind: LightKind,
+    st: &mut RenderStats,
+) -> bool {
+    let Some(first) = surfs.first() else {
+        return false;
+    };
+    let Some((_, end)) = light_dir(tr, kind, first.p) else {
+        return false;
+    };
+    let mut qb = point_box(first.q);
+    let mut min_w = f64::INFINITY;
+    for s in surfs {
+        qb = box_hull(qb, point_box(s.q));
+        min_w = min_w.min(s.min_w);
+    }
+    let starts: Vec<[f64; 3]> = surfs.iter().map(|s| s.q).collect();
+    // A beam cannot be resolved much below its own cross-section: give up
+    // (and fall back to per-pixel segments) once pieces get that short.
+    let diam = qb.iter().map(|c| c.width() * c.width()).sum::<f64>().sqrt();
+    segment_free(tr, qb, &starts, end, min_w.max(diam), st)
+}
+
+/// Shades one surface point; `lit_by_beam[l]` says a shadow beam already
+/// proved light l visible.
+pub(crate) fn shade(
+    tr: &Tracer<'_>,
+    s: &Surf,
+    lit_by_beam: &[bool],
+    st: &mut RenderStats,
+) -> [f64; 3] {
+    let mut c = scale(s.color, AMBIENT);
+    for (li, light) in tr.lights.iter().enumerate() {
+        let Some((l, end)) = light_dir(tr, light.kind, s.p) else {
+            continue;
+        };
+        let ndl = dot(s.n, l);
+        if ndl <= 0.0 {
+            continue;
+        }
+        if light.shadows && !lit_by_beam.get(li).copied().unwrap_or(false) {
+            st.shadow_rays += 1;
+            if !segment_free(tr, point_box(s.q), &[s.q], end, s.min_w, st) {
+                continue;
+            }
+        }
+        let h = normalize(add(l, s.v)).unwrap_or(s.n);
+        let spec = SPECULAR * crate::interval::powi_point(dot(s.n, h).max(0.0), SHININESS);
+        for (ch, out) in c.iter_mut().enumerate() {
+            *out += light.color[ch] * (s.color[ch] * ndl + spec);
+        }
+    }
+    c
+}

@@ -1,0 +1,146 @@
+//! Render counters: gathered per tile, merged in tile order at the end, so
+//! every count is the same for any thread count (times are not).
+
+use std::fmt;
+
+/// What a render did and how long it took.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RenderStats {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Pixels whose ray hit a surface.
+    pub pixels_hit: u64,
+    /// Single rays traced (interval rays for beam/pixel, marches for point).
+    pub rays: u64,
+    /// Pixels of included blocks, which refine a bracketed root (no ray).
+    pub pixels_refined: u64,
+    /// Interval (and interval-gradient) evaluations of one object.
+    pub interval_evals: u64,
+    /// Point (and point-gradient) evaluations of one object.
+    pub point_evals: u64,
+    /// Per-pixel shadow segments tested.
+    pub shadow_rays: u64,
+    /// Per-pixel shadow segments made unnecessary by a block shadow beam.
+    pub shadow_rays_saved: u64,
+    /// Shadow beams that proved a whole block lit.
+    pub shadow_beams_ok: u64,
+    /// Shadow beams tried.
+    pub shadow_beams: u64,
+    /// Mean-value tightenings of a block interval tried.
+    pub mean_value_tries: u64,
+    /// Mean-value tightenings that proved a sign the natural form did not.
+    pub mean_value_wins: u64,
+    /// Mean-value (tries, wins) per block-size class, log2 of the side;
+    /// drives the per-tile choice to use the form (not in the JSON).
+    pub mean_value_levels: [(u64, u64); super::MV_LEVELS],
+    /// Blocks (over one pixel) whose whole ray range was rejected.
+    pub blocks_rejected: u64,
+    /// Blocks (over one pixel) settled by the inclusion test.
+    pub blocks_included: u64,
+    /// Blocks (over one pixel) split or handed to single rays.
+    pub blocks_undecided: u64,
+    /// Render wall time, ms (excludes parsing and compiling).
+    pub time_ms: f64,
+    /// Time to build the evaluators, ms (set by the caller).
+    pub compile_ms: f64,
+    /// Visibility (beams, rays, root refinement), summed over threads, ms.
+    pub trace_cpu_ms: f64,
+    /// Shading without shadows, summed over threads, ms.
+    pub shade_cpu_ms: f64,
+    /// Shadow tests, summed over threads, ms.
+    pub shadow_cpu_ms: f64,
+    /// Building the output images after tracing, wall ms.
+    pub output_ms: f64,
+}
+
+impl RenderStats {
+    /// Adds the counters and CPU times of `o` (a tile) into `self`.
+    pub fn merge(&mut self, o: &RenderStats) {
+        self.pixels_hit += o.pixels_hit;
+        self.rays += o.rays;
+        self.pixels_refined += o.pixels_refined;
+        self.interval_evals += o.interval_evals;
+        self.point_evals += o.point_evals;
+        self.shadow_rays += o.shadow_rays;
+        self.shadow_rays_saved += o.shadow_rays_saved;
+        self.shadow_beams_ok += o.shadow_beams_ok;
+        self.shadow_beams += o.shadow_beams;
+        self.mean_value_tries += o.mean_value_tries;
+        self.mean_value_wins += o.mean_value_wins;
+        for (a, b) in self.mean_value_levels.iter_mut().zip(&o.mean_value_levels) {
+            a.0 += b.0;
+            a.1 += b.1;
+        }
+        self.blocks_rejected += o.blocks_rejected;
+        self.blocks_included += o.blocks_included;
+        self.blocks_undecided += o.blocks_undecided;
+        self.trace_cpu_ms += o.trace_cpu_ms;
+        self.shade_cpu_ms += o.shade_cpu_ms;
+        self.shadow_cpu_ms += o.shadow_cpu_ms;
+    }
+
+    /// The statistics as a JSON object (key names = field names).
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "width": self.width,
+            "height": self.height,
+            "pixels_hit": self.pixels_hit,
+            "rays": self.rays,
+            "pixels_refined": self.pixels_refined,
+            "interval_evals": self.interval_evals,
+            "point_evals": self.point_evals,
+            "shadow_rays": self.shadow_rays,
+            "shadow_rays_saved": self.shadow_rays_saved,
+            "shadow_beams_ok": self.shadow_beams_ok,
+            "shadow_beams": self.shadow_beams,
+            "mean_value_tries": self.mean_value_tries,
+            "mean_value_wins": self.mean_value_wins,
+            "blocks_rejected": self.blocks_rejected,
+            "blocks_included": self.blocks_included,
+            "blocks_undecided": self.blocks_undecided,
+            "time_ms": self.time_ms,
+            "compile_ms": self.compile_ms,
+            "trace_cpu_ms": self.trace_cpu_ms,
+            "shade_cpu_ms": self.shade_cpu_ms,
+            "shadow_cpu_ms": self.shadow_cpu_ms,
+            "output_ms": self.output_ms,
+        })
+    }
+}
+
+impl fmt::Display for RenderStats {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let px = u64::from(self.width) * u64::from(self.height);
+        writeln!(
+            f,
+            "{}x{}: {} of {} pixels hit in {:.1} ms (compile {:.1} ms)",
+            self.width, self.height, self.pixels_hit, px, self.time_ms, self.compile_ms
+        )?;
+        writeln!(
+            f,
+            "rays {}, refined pixels {}, blocks rejected/included/undecided {}/{}/{}",
+            self.rays,
+            self.pixels_refined,
+            self.blocks_rejected,
+            self.blocks_included,
+            self.blocks_undecided
+        )?;
+        writeln!(
+            f,
+            "evaluations: interval {}, point {}",
+            self.interval_evals, self.point_evals
+        )?;
+        writeln!(
+            f,
+            "shadow rays {}, saved by {} of {} shadow beams {}",
+            self.shadow_rays, self.shadow_beams_ok, self.shadow_beams, self.shadow_rays_saved
+        )?;
+        write!(
+            f,
+            "cpu ms: trace {:.1}, shade {:.1}, shadow {:.1}; output {:.1} ms",
+            self.trace_cpu_ms, self.shade_cpu_ms, self.shadow_cpu_ms, self.output_ms
+        )
+    }
+}
