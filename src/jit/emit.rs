@@ -243,6 +243,11 @@ impl Emitter<'_, '_> {
         }
     }
 
+    /// `Interval::mul`, except in one case where the reference is unsound:
+    /// when every bound product is 0·inf (`[0, 0] * [-inf, inf]`) the
+    /// NaN-ignoring hull is NaN and the reference answers EMPTY, although
+    /// `0 * b = 0` for every real `b`. Here that case gives `[0, 0]`
+    /// (EMPTY operands still give EMPTY).
     pub fn iv_mul(&mut self, a: Iv, b: Iv) -> Iv {
         let p = [
             self.mul(a.lo, b.lo),
@@ -250,7 +255,17 @@ impl Emitter<'_, '_> {
             self.mul(a.hi, b.lo),
             self.mul(a.hi, b.hi),
         ];
-        self.hull4(p)
+        let h = self.hull4(p);
+        let all_nan = self.fcmp(FloatCC::Unordered, h.lo, h.lo);
+        let z = self.c(0.0);
+        let r = Iv {
+            lo: self.select(all_nan, z, h.lo),
+            hi: self.select(all_nan, z, h.hi),
+        };
+        let ea = self.is_empty(a);
+        let eb = self.is_empty(b);
+        let e = self.b.ins().bor(ea, eb);
+        self.empty_if(e, r)
     }
 
     /// `Interval::div`, with its three cases as selects (no branches).

@@ -7,7 +7,7 @@
 //! function of x and y emits no code for ∂/∂z.
 
 use cranelift_codegen::ir::condcodes::FloatCC;
-use cranelift_codegen::ir::{InstBuilder, Value};
+use cranelift_codegen::ir::{InstBuilder, StackSlotData, StackSlotKind, Value, types};
 
 use super::emit::{Emitter, Iv, binary_shim_index, unary_shim_index};
 use crate::ir::{BinaryOp, Function, Op, UnaryOp};
@@ -28,24 +28,184 @@ pub(crate) fn live_ops(f: &Function) -> Vec<bool> {
     live
 }
 
-/// Point value of f at `(x, y, z)`.
-pub(crate) fn point(e: &mut Emitter, f: &Function, live: &[bool], xyz: [Value; 3]) -> Value {
-    let mut vals: Vec<Option<Value>> = vec![None; f.ops.len()];
+/// A use further than this many ops from the value's last register copy
+/// reloads it from a stack slot. Cranelift's register allocator slows down
+/// sharply (superlinearly) when thousands of long live ranges overlap, as in
+/// a large CSG tree where a coordinate or a shared subexpression is used all
+/// over; bounding every CLIF live range to a window of ops keeps
+/// compilation linear, and a reload from L1 costs less than a spill the
+/// allocator would insert anyway.
+fn window() -> usize { std::env::var("IBEAM_WIN").ok().and_then(|v| v.parse().ok()).unwrap_or(24) }
+
+/// Where each value that is used far from its definition is kept.
+struct SpillPlan {
+    /// Slot index of each op's value, if it is ever reloaded.
+    slot: Vec<Option<u32>>,
+    /// Number of slots needed at once.
+    slots: u32,
+}
+
+/// Assigns stack slots to far-used values, reusing a slot once the value
+/// in it is dead (so the frame stays small even for huge functions).
+fn plan_spills(f: &Function, live: &[bool]) -> SpillPlan {
+    let n = f.ops.len();
+    let mut far = vec![false; n];
+    let mut last_use = vec![0usize; n];
     for (i, op) in f.ops.iter().enumerate() {
         if !live[i] {
             continue;
         }
-        let get = |v: crate::ir::ValueId| vals[v.index()].expect("operand lowered before use");
-        let r = match *op {
-            Op::Var(v) => xyz[v.index()],
-            Op::Const(c) => e.c(c),
-            Op::Unary(u, a) => point_unary(e, u, get(a)),
-            Op::Binary(b, x, y) => point_binary(e, b, get(x), get(y)),
-            Op::Powi(a, n) => e.powi_point(get(a), i64::from(n)),
-        };
-        vals[i] = Some(r);
+        for a in op.operands() {
+            let a = a.index();
+            if i - a > window() {
+                far[a] = true;
+            }
+            last_use[a] = last_use[a].max(i);
+        }
     }
-    vals[f.root.index()].expect("root lowered")
+    let mut release: Vec<Vec<u32>> = vec![Vec::new(); n];
+    let mut free: Vec<u32> = Vec::new();
+    let mut slots = 0u32;
+    let mut slot = vec![None; n];
+    for i in 0..n {
+        // Values last read by op i are dead once i has loaded its operands,
+        // so i's own value may take their slot.
+        free.append(&mut release[i]);
+        if far[i] {
+            let s = free.pop().unwrap_or_else(|| {
+                slots += 1;
+                slots - 1
+            });
+            slot[i] = Some(s);
+            release[last_use[i]].push(s);
+        }
+    }
+    SpillPlan { slot, slots }
+}
+
+/// A lowered value that can be saved to and reloaded from memory: its CLIF
+/// values in a fixed order. The shape (e.g. which partials are known zero)
+/// is kept in a template copy.
+pub(crate) trait Spill: Copy {
+    /// The CLIF values (at most [`MAX_PARTS`]).
+    fn parts(&self, out: &mut Vec<Value>);
+    /// The same shape, with values taken in order from `vals`.
+    fn rebuild(&self, vals: &mut dyn Iterator<Item = Value>) -> Self;
+}
+
+/// Most f64 one lowered value holds (an interval and three partials).
+const MAX_PARTS: i32 = 8;
+
+impl Spill for Value {
+    fn parts(&self, out: &mut Vec<Value>) {
+        out.push(*self);
+    }
+    fn rebuild(&self, vals: &mut dyn Iterator<Item = Value>) -> Self {
+        vals.next().expect("one part")
+    }
+}
+
+impl Spill for Iv {
+    fn parts(&self, out: &mut Vec<Value>) {
+        out.push(self.lo);
+        out.push(self.hi);
+    }
+    fn rebuild(&self, vals: &mut dyn Iterator<Item = Value>) -> Self {
+        let lo = vals.next().expect("lo");
+        let hi = vals.next().expect("hi");
+        Iv { lo, hi }
+    }
+}
+
+impl<T: Spill> Spill for (T, [Option<T>; 3]) {
+    fn parts(&self, out: &mut Vec<Value>) {
+        self.0.parts(out);
+        for d in self.1.iter().flatten() {
+            d.parts(out);
+        }
+    }
+    fn rebuild(&self, vals: &mut dyn Iterator<Item = Value>) -> Self {
+        let v = self.0.rebuild(vals);
+        let d = self.1.map(|d| d.map(|d| d.rebuild(vals)));
+        (v, d)
+    }
+}
+
+/// One forward sweep over the live ops: `var` lowers an input, `op` an op
+/// given its lowered operands. Far uses reload from stack slots (see
+/// [`WINDOW`]).
+fn sweep<T: Spill>(
+    e: &mut Emitter,
+    f: &Function,
+    live: &[bool],
+    mut var: impl FnMut(&mut Emitter, usize) -> T,
+    mut op: impl FnMut(&mut Emitter, &Op, &[T]) -> T,
+) -> T {
+    let plan = plan_spills(f, live);
+    let ss = (plan.slots > 0).then(|| {
+        let bytes = plan.slots * 8 * MAX_PARTS as u32;
+        e.b.create_sized_stack_slot(StackSlotData::new(StackSlotKind::ExplicitSlot, bytes, 4))
+    });
+    let mut vals: Vec<Option<(T, usize)>> = vec![None; f.ops.len()];
+    let mut parts = Vec::with_capacity(MAX_PARTS as usize);
+    for (i, o) in f.ops.iter().enumerate() {
+        if !live[i] {
+            continue;
+        }
+        let mut args: [Option<T>; 2] = [None, None];
+        for (k, a) in o.operands().enumerate() {
+            let a = a.index();
+            let (t, at) = vals[a].expect("operand lowered before use");
+            let t = match (i - at > window(), ss, plan.slot[a]) {
+                (true, Some(ss), Some(s)) => {
+                    let base = s as i32 * 8 * MAX_PARTS;
+                    let mut off = base;
+                    parts.clear();
+                    t.parts(&mut parts);
+                    let loaded: Vec<Value> = parts
+                        .iter()
+                        .map(|_| {
+                            let v = e.b.ins().stack_load(types::I64, types::F64, ss, off);
+                            off += 8;
+                            v
+                        })
+                        .collect();
+                    let r = t.rebuild(&mut loaded.into_iter());
+                    vals[a] = Some((r, i));
+                    r
+                }
+                _ => t,
+            };
+            args[k] = Some(t);
+        }
+        let r = match *o {
+            Op::Var(v) => var(e, v.index()),
+            _ => {
+                let args: Vec<T> = args.iter().flatten().copied().collect();
+                op(e, o, &args)
+            }
+        };
+        if let (Some(ss), Some(s)) = (ss, plan.slot[i]) {
+            parts.clear();
+            r.parts(&mut parts);
+            for (k, &p) in parts.iter().enumerate() {
+                e.b.ins().stack_store(types::I64, p, ss, s as i32 * 8 * MAX_PARTS + 8 * k as i32);
+            }
+        }
+        vals[i] = Some((r, i));
+    }
+    vals[f.root.index()].expect("root lowered").0
+}
+
+/// Point value of f at `(x, y, z)`.
+pub(crate) fn point(e: &mut Emitter, f: &Function, live: &[bool], xyz: [Value; 3]) -> Value {
+    sweep(e, f, live, |_, k| xyz[k], |e, op, a| match *op {
+        Op::Const(c) => e.c(c),
+        Op::Unary(u, _) => point_unary(e, u, a[0]),
+        Op::Binary(b, _, _) => point_binary(e, b, a[0], a[1]),
+        Op::Powi(_, n) => e.powi_point(a[0], i64::from(n)),
+        Op::Var(v) => xyz[v.index()],
+    })
 }
 
 fn point_unary(e: &mut Emitter, u: UnaryOp, a: Value) -> Value {
@@ -78,22 +238,13 @@ fn point_binary(e: &mut Emitter, op: BinaryOp, a: Value, b: Value) -> Value {
 
 /// Interval of f over the box `b`.
 pub(crate) fn interval(e: &mut Emitter, f: &Function, live: &[bool], b: [Iv; 3]) -> Iv {
-    let mut vals: Vec<Option<Iv>> = vec![None; f.ops.len()];
-    for (i, op) in f.ops.iter().enumerate() {
-        if !live[i] {
-            continue;
-        }
-        let get = |v: crate::ir::ValueId| vals[v.index()].expect("operand lowered before use");
-        let r = match *op {
-            Op::Var(v) => b[v.index()],
-            Op::Const(c) => e.iv_const(c),
-            Op::Unary(u, a) => iv_unary(e, u, get(a)),
-            Op::Binary(op, x, y) => iv_binary(e, op, get(x), get(y)),
-            Op::Powi(a, n) => e.iv_powi(get(a), i64::from(n)),
-        };
-        vals[i] = Some(r);
-    }
-    vals[f.root.index()].expect("root lowered")
+    sweep(e, f, live, |_, k| b[k], |e, op, a| match *op {
+        Op::Const(c) => e.iv_const(c),
+        Op::Unary(u, _) => iv_unary(e, u, a[0]),
+        Op::Binary(o, _, _) => iv_binary(e, o, a[0], a[1]),
+        Op::Powi(_, n) => e.iv_powi(a[0], i64::from(n)),
+        Op::Var(v) => b[v.index()],
+    })
 }
 
 fn iv_unary(e: &mut Emitter, u: UnaryOp, a: Iv) -> Iv {
@@ -255,27 +406,24 @@ type Dual<T> = (T, [Option<T>; 3]);
 
 /// Forward-mode value and gradient of f; inputs are the (point or interval)
 /// coordinates.
-pub(crate) fn grad<T: Num>(e: &mut Emitter, f: &Function, live: &[bool], xyz: [T; 3]) -> Dual<T> {
-    let mut vals: Vec<Option<Dual<T>>> = vec![None; f.ops.len()];
-    for (i, op) in f.ops.iter().enumerate() {
-        if !live[i] {
-            continue;
-        }
-        let get = |v: crate::ir::ValueId| vals[v.index()].expect("operand lowered before use");
-        let r = match *op {
-            Op::Var(v) => {
-                let mut d = [None; 3];
-                d[v.index()] = Some(T::konst(e, 1.0));
-                (xyz[v.index()], d)
-            }
-            Op::Const(c) => (T::konst(e, c), [None; 3]),
-            Op::Unary(u, a) => grad_unary(e, u, get(a)),
-            Op::Binary(op, a, b) => grad_binary(e, op, get(a), get(b)),
-            Op::Powi(a, n) => grad_powi(e, get(a), i64::from(n)),
-        };
-        vals[i] = Some(r);
-    }
-    vals[f.root.index()].expect("root lowered")
+pub(crate) fn grad<T: Num + Spill>(
+    e: &mut Emitter,
+    f: &Function,
+    live: &[bool],
+    xyz: [T; 3],
+) -> Dual<T> {
+    let var = |e: &mut Emitter, k: usize| {
+        let mut d = [None; 3];
+        d[k] = Some(T::konst(e, 1.0));
+        (xyz[k], d)
+    };
+    sweep(e, f, live, var, |e, op, a| match *op {
+        Op::Const(c) => (T::konst(e, c), [None; 3]),
+        Op::Unary(u, _) => grad_unary(e, u, a[0]),
+        Op::Binary(o, _, _) => grad_binary(e, o, a[0], a[1]),
+        Op::Powi(_, n) => grad_powi(e, a[0], i64::from(n)),
+        Op::Var(v) => var(e, v.index()),
+    })
 }
 
 /// `d[k] = rule(d[k])` for each non-zero partial.

@@ -128,11 +128,11 @@ fn isa() -> Result<OwnedTargetIsa, JitError> {
         let set = |fb: &mut settings::Builder, k: &str, v: &str| {
             fb.set(k, v).map_err(|e| JitError::new(k, e))
         };
-        set(&mut flags, "opt_level", "speed")?;
+        set(&mut flags, "opt_level", &std::env::var("IBEAM_OPT").unwrap_or("speed".into()))?;
         set(&mut flags, "use_colocated_libcalls", "false")?;
         set(&mut flags, "is_pic", "false")?;
-        let verify = if cfg!(debug_assertions) { "true" } else { "false" };
-        set(&mut flags, "enable_verifier", verify)?;
+        let verify = std::env::var("IBEAM_VERIFY").unwrap_or(if cfg!(debug_assertions) { "true" } else { "false" }.into());
+        set(&mut flags, "enable_verifier", &verify)?;
         let builder = cranelift_native::builder().map_err(|e| JitError::new("host ISA", e))?;
         builder
             .finish(settings::Flags::new(flags))
