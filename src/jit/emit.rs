@@ -422,7 +422,7 @@ impl Emitter<'_, '_> {
             return self.iv_const(1.0);
         }
         let m = n.unsigned_abs();
-        let p = if m % 2 == 0 {
+        let p = if m.is_multiple_of(2) {
             let s = self.iv_abs(a);
             Iv {
                 lo: self.pow_unrolled(s.lo, m, Round::DownNonNeg),
@@ -471,7 +471,10 @@ impl Emitter<'_, '_> {
     /// arguments and come back as two f64 results (xmm0, xmm1), which is
     /// the C ABI of a returned `#[repr(C)]` pair of doubles.
     pub fn call_iv_unary(&mut self, i: usize, a: Iv) -> Iv {
-        let call = self.b.ins().call(self.shims.interval_unary[i], &[a.lo, a.hi]);
+        let call = self
+            .b
+            .ins()
+            .call(self.shims.interval_unary[i], &[a.lo, a.hi]);
         let r = self.b.inst_results(call);
         Iv { lo: r[0], hi: r[1] }
     }

@@ -35,7 +35,7 @@ pub(crate) fn live_ops(f: &Function) -> Vec<bool> {
 /// over; bounding every CLIF live range to a window of ops keeps
 /// compilation linear, and a reload from L1 costs less than a spill the
 /// allocator would insert anyway.
-fn window() -> usize { std::env::var("IBEAM_WIN").ok().and_then(|v| v.parse().ok()).unwrap_or(24) }
+const WINDOW: usize = 24;
 
 /// Where each value that is used far from its definition is kept.
 struct SpillPlan {
@@ -57,7 +57,7 @@ fn plan_spills(f: &Function, live: &[bool]) -> SpillPlan {
         }
         for a in op.operands() {
             let a = a.index();
-            if i - a > window() {
+            if i - a > WINDOW {
                 far[a] = true;
             }
             last_use[a] = last_use[a].max(i);
@@ -156,7 +156,7 @@ fn sweep<T: Spill>(
         for (k, a) in o.operands().enumerate() {
             let a = a.index();
             let (t, at) = vals[a].expect("operand lowered before use");
-            let t = match (i - at > window(), ss, plan.slot[a]) {
+            let t = match (i - at > WINDOW, ss, plan.slot[a]) {
                 (true, Some(ss), Some(s)) => {
                     let base = s as i32 * 8 * MAX_PARTS;
                     let mut off = base;
@@ -189,7 +189,8 @@ fn sweep<T: Spill>(
             parts.clear();
             r.parts(&mut parts);
             for (k, &p) in parts.iter().enumerate() {
-                e.b.ins().stack_store(types::I64, p, ss, s as i32 * 8 * MAX_PARTS + 8 * k as i32);
+                e.b.ins()
+                    .stack_store(types::I64, p, ss, s as i32 * 8 * MAX_PARTS + 8 * k as i32);
             }
         }
         vals[i] = Some((r, i));
@@ -199,13 +200,19 @@ fn sweep<T: Spill>(
 
 /// Point value of f at `(x, y, z)`.
 pub(crate) fn point(e: &mut Emitter, f: &Function, live: &[bool], xyz: [Value; 3]) -> Value {
-    sweep(e, f, live, |_, k| xyz[k], |e, op, a| match *op {
-        Op::Const(c) => e.c(c),
-        Op::Unary(u, _) => point_unary(e, u, a[0]),
-        Op::Binary(b, _, _) => point_binary(e, b, a[0], a[1]),
-        Op::Powi(_, n) => e.powi_point(a[0], i64::from(n)),
-        Op::Var(v) => xyz[v.index()],
-    })
+    sweep(
+        e,
+        f,
+        live,
+        |_, k| xyz[k],
+        |e, op, a| match *op {
+            Op::Const(c) => e.c(c),
+            Op::Unary(u, _) => point_unary(e, u, a[0]),
+            Op::Binary(b, _, _) => point_binary(e, b, a[0], a[1]),
+            Op::Powi(_, n) => e.powi_point(a[0], i64::from(n)),
+            Op::Var(v) => xyz[v.index()],
+        },
+    )
 }
 
 fn point_unary(e: &mut Emitter, u: UnaryOp, a: Value) -> Value {
@@ -238,13 +245,19 @@ fn point_binary(e: &mut Emitter, op: BinaryOp, a: Value, b: Value) -> Value {
 
 /// Interval of f over the box `b`.
 pub(crate) fn interval(e: &mut Emitter, f: &Function, live: &[bool], b: [Iv; 3]) -> Iv {
-    sweep(e, f, live, |_, k| b[k], |e, op, a| match *op {
-        Op::Const(c) => e.iv_const(c),
-        Op::Unary(u, _) => iv_unary(e, u, a[0]),
-        Op::Binary(o, _, _) => iv_binary(e, o, a[0], a[1]),
-        Op::Powi(_, n) => e.iv_powi(a[0], i64::from(n)),
-        Op::Var(v) => b[v.index()],
-    })
+    sweep(
+        e,
+        f,
+        live,
+        |_, k| b[k],
+        |e, op, a| match *op {
+            Op::Const(c) => e.iv_const(c),
+            Op::Unary(u, _) => iv_unary(e, u, a[0]),
+            Op::Binary(o, _, _) => iv_binary(e, o, a[0], a[1]),
+            Op::Powi(_, n) => e.iv_powi(a[0], i64::from(n)),
+            Op::Var(v) => b[v.index()],
+        },
+    )
 }
 
 fn iv_unary(e: &mut Emitter, u: UnaryOp, a: Iv) -> Iv {
@@ -481,7 +494,12 @@ fn grad_unary<T: Num>(e: &mut Emitter, u: UnaryOp, (a, da): Dual<T>) -> Dual<T> 
     (v, d)
 }
 
-fn grad_binary<T: Num>(e: &mut Emitter, op: BinaryOp, (a, da): Dual<T>, (b, db): Dual<T>) -> Dual<T> {
+fn grad_binary<T: Num>(
+    e: &mut Emitter,
+    op: BinaryOp,
+    (a, da): Dual<T>,
+    (b, db): Dual<T>,
+) -> Dual<T> {
     let v = T::binary(e, op, a, b);
     let mut d = [None; 3];
     for k in 0..3 {

@@ -20,7 +20,8 @@ pub(crate) type PointGradFn = unsafe extern "C" fn(f64, f64, f64, *mut f64);
 /// (interval gradient evaluator).
 pub(crate) type IntervalFn = unsafe extern "C" fn(*const f64, *mut f64);
 /// `(xs, ys, zs, out, n)`.
-pub(crate) type PointBatchFn = unsafe extern "C" fn(*const f64, *const f64, *const f64, *mut f64, usize);
+pub(crate) type PointBatchFn =
+    unsafe extern "C" fn(*const f64, *const f64, *const f64, *mut f64, usize);
 /// `(boxes, out, n)`: `n` boxes of 6 bounds in, `n` intervals out.
 pub(crate) type IntervalBatchFn = unsafe extern "C" fn(*const f64, *mut f64, usize);
 

@@ -70,11 +70,31 @@ pub(crate) fn all() -> [(&'static str, ShimSig, *const u8); 12] {
         ("ibeam_point_cos", PointUnary, point_cos as *const u8),
         ("ibeam_point_atan2", PointBinary, point_atan2 as *const u8),
         ("ibeam_point_pow", PointBinary, point_pow as *const u8),
-        ("ibeam_interval_exp", IntervalUnary, interval_exp as *const u8),
+        (
+            "ibeam_interval_exp",
+            IntervalUnary,
+            interval_exp as *const u8,
+        ),
         ("ibeam_interval_ln", IntervalUnary, interval_ln as *const u8),
-        ("ibeam_interval_sin", IntervalUnary, interval_sin as *const u8),
-        ("ibeam_interval_cos", IntervalUnary, interval_cos as *const u8),
-        ("ibeam_interval_atan2", IntervalBinary, interval_atan2 as *const u8),
-        ("ibeam_interval_pow", IntervalBinary, interval_pow as *const u8),
+        (
+            "ibeam_interval_sin",
+            IntervalUnary,
+            interval_sin as *const u8,
+        ),
+        (
+            "ibeam_interval_cos",
+            IntervalUnary,
+            interval_cos as *const u8,
+        ),
+        (
+            "ibeam_interval_atan2",
+            IntervalBinary,
+            interval_atan2 as *const u8,
+        ),
+        (
+            "ibeam_interval_pow",
+            IntervalBinary,
+            interval_pow as *const u8,
+        ),
     ]
 }
