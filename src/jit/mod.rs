@@ -199,12 +199,14 @@ fn build(
     live: &[bool],
     module: &mut JITModule,
     shim_ids: &[FuncId; 12],
+    body: Option<FuncId>,
 ) -> ir::Function {
     let cc = module.isa().default_call_conv();
     let mut func =
         ir::Function::with_name_signature(UserFuncName::user(0, kind as u32), kind.signature(cc));
     let fe_config = module.isa().frontend_config();
     let r = shim_ids.map(|id| module.declare_func_in_func(id, &mut func));
+    let callee = body.map(|id| module.declare_func_in_func(id, &mut func));
     let shims = ShimRefs {
         point_unary: [r[0], r[1], r[2], r[3]],
         point_binary: [r[4], r[5]],
@@ -277,24 +279,27 @@ fn build(
             b.ins().brif(more, body, &[], exit, &[]);
             b.switch_to_block(body);
             b.seal_block(body);
+            // The loop calls the single-evaluation function (compiled into
+            // the same module) rather than inlining its body: the call costs
+            // a few ns against the microseconds a large body takes, and the
+            // loop stays small enough to read in `--clif` output.
+            let callee = callee.expect("batch kinds are built with a body function");
             if kind == Kind::PointBatch {
                 let off = b.ins().ishl_imm_u(i_param, 3);
                 let addr = |b: &mut FunctionBuilder, base: ir::Value| b.ins().iadd(base, off);
                 let ptrs = [0, 1, 2, 3].map(|k| addr(&mut b, params[k]));
                 let mut e = Emitter { b: &mut b, shims };
                 let xyz = [0, 1, 2].map(|k| e.load(ptrs[k], 0));
-                let v = lower::point(&mut e, f, live, xyz);
+                let call = b.ins().call(callee, &xyz);
+                let v = b.inst_results(call)[0];
+                let mut e = Emitter { b: &mut b, shims };
                 e.store(v, ptrs[3], 0);
             } else {
                 let in_off = b.ins().imul_imm_u(i_param, 48);
                 let out_off = b.ins().ishl_imm_u(i_param, 4);
                 let inp = b.ins().iadd(params[0], in_off);
                 let outp = b.ins().iadd(params[1], out_off);
-                let mut e = Emitter { b: &mut b, shims };
-                let bx = load_box(&mut e, inp);
-                let v = lower::interval(&mut e, f, live, bx);
-                e.store(v.lo, outp, 0);
-                e.store(v.hi, outp, 8);
+                b.ins().call(callee, &[inp, outp]);
             }
             let next = b.ins().iadd_imm_u(i_param, 1);
             b.ins().jump(header, &[BlockArg::Value(next)]);
@@ -308,17 +313,57 @@ fn build(
     func
 }
 
-/// Compiles `kind` for `f` into its own module.
-fn compile<F: EntryFn>(kind: Kind, f: &Function, live: &[bool]) -> Result<Code<F>, JitError> {
-    let (mut module, shim_ids) = new_module()?;
-    let func = build(kind, f, live, &mut module, &shim_ids);
-    let id = module
-        .declare_function(kind.name(), Linkage::Local, &func.signature)
-        .map_err(|e| JitError::new(kind.name(), e))?;
+/// The single-evaluation kind a batch kind loops over.
+fn batch_body(kind: Kind) -> Option<Kind> {
+    match kind {
+        Kind::PointBatch => Some(Kind::Point),
+        Kind::IntervalBatch => Some(Kind::Interval),
+        _ => None,
+    }
+}
+
+/// Declares the body function of a batch kind in `module`.
+fn declare_body(module: &mut JITModule, body: Kind) -> Result<FuncId, JitError> {
+    let sig = body.signature(module.isa().default_call_conv());
+    let name = format!("{}_body", body.name());
+    module
+        .declare_function(&name, Linkage::Local, &sig)
+        .map_err(|e| JitError::new(&name, e))
+}
+
+/// Builds and defines `kind` in `module` under a fresh id.
+fn define(
+    kind: Kind,
+    f: &Function,
+    live: &[bool],
+    module: &mut JITModule,
+    shim_ids: &[FuncId; 12],
+    id: FuncId,
+    body: Option<FuncId>,
+) -> Result<(), JitError> {
+    let func = build(kind, f, live, module, shim_ids, body);
     let mut ctx = Context::for_function(func);
     module
         .define_function(id, &mut ctx)
-        .map_err(|e| JitError::new(kind.name(), format!("{e:?}")))?;
+        .map_err(|e| JitError::new(kind.name(), format!("{e:?}")))
+}
+
+/// Compiles `kind` for `f` into its own module.
+fn compile<F: EntryFn>(kind: Kind, f: &Function, live: &[bool]) -> Result<Code<F>, JitError> {
+    let (mut module, shim_ids) = new_module()?;
+    let body = match batch_body(kind) {
+        Some(bk) => {
+            let bid = declare_body(&mut module, bk)?;
+            define(bk, f, live, &mut module, &shim_ids, bid, None)?;
+            Some(bid)
+        }
+        None => None,
+    };
+    let sig = kind.signature(module.isa().default_call_conv());
+    let id = module
+        .declare_function(kind.name(), Linkage::Local, &sig)
+        .map_err(|e| JitError::new(kind.name(), e))?;
+    define(kind, f, live, &mut module, &shim_ids, id, body)?;
     module
         .finalize_definitions()
         .map_err(|e| JitError::new(kind.name(), e))?;
@@ -326,14 +371,19 @@ fn compile<F: EntryFn>(kind: Kind, f: &Function, live: &[bool]) -> Result<Code<F
 }
 
 /// The CLIF (Cranelift IR, before optimisation) of every evaluator kind of
-/// `f`, each headed `; evaluator: NAME`.
+/// `f`, each headed `; evaluator: NAME`. The batch kinds are loops that
+/// call the point or interval function.
 pub fn clif_text(f: &Function) -> Result<String, JitError> {
     crate::ir::validate::validate(f).map_err(|e| JitError::new("invalid IR", e))?;
     let live = lower::live_ops(f);
     let (mut module, shim_ids) = new_module()?;
     let mut out = String::new();
     for kind in Kind::ALL {
-        let func = build(kind, f, &live, &mut module, &shim_ids);
+        let body = match batch_body(kind) {
+            Some(bk) => Some(declare_body(&mut module, bk)?),
+            None => None,
+        };
+        let func = build(kind, f, &live, &mut module, &shim_ids, body);
         out.push_str(&format!(
             "; evaluator: {}\n{}\n",
             kind.name(),
