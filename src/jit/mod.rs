@@ -568,3 +568,126 @@ impl Evaluator for JitEvaluator {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Compiles `x -> emit(x)` as a point-signature function.
+    fn compile_unary(emit: impl Fn(&mut Emitter, ir::Value) -> ir::Value) -> Code<PointFn> {
+        let (mut module, shim_ids) = new_module().unwrap();
+        let cc = module.isa().default_call_conv();
+        let sig = PointFn::signature(cc);
+        let mut func = ir::Function::with_name_signature(UserFuncName::user(0, 0), sig.clone());
+        let r = shim_ids.map(|id| module.declare_func_in_func(id, &mut func));
+        let shims = ShimRefs {
+            point_unary: [r[0], r[1], r[2], r[3]],
+            point_binary: [r[4], r[5]],
+            interval_unary: [r[6], r[7], r[8], r[9]],
+            interval_binary: [r[10], r[11]],
+        };
+        let fe = module.isa().frontend_config();
+        let mut fctx = FunctionBuilderContext::new();
+        let mut b = FunctionBuilder::new(&mut func, &mut fctx);
+        let entry = b.create_block();
+        b.append_block_params_for_function_params(entry);
+        b.switch_to_block(entry);
+        b.seal_block(entry);
+        let x = b.block_params(entry)[0];
+        let mut e = Emitter { b: &mut b, shims };
+        let v = emit(&mut e, x);
+        b.ins().return_(&[v]);
+        b.finalize(fe);
+        let id = module.declare_function("t", Linkage::Local, &sig).unwrap();
+        let mut ctx = Context::for_function(func);
+        module.define_function(id, &mut ctx).unwrap();
+        module.finalize_definitions().unwrap();
+        Code::new(module, id).unwrap()
+    }
+
+    const SPECIAL: [f64; 14] = [
+        0.0,
+        -0.0,
+        5e-324,
+        -5e-324,
+        f64::MIN_POSITIVE,
+        1.0,
+        -1.0,
+        f64::MAX,
+        f64::MIN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NAN,
+        -f64::NAN,
+        1e-310,
+    ];
+
+    /// Every bit pattern class the ulp step can meet, NaN payloads included
+    /// (a signalling NaN next to -inf, and one next to -0 in bits).
+    fn cases() -> Vec<f64> {
+        let mut v = SPECIAL.to_vec();
+        v.push(f64::from_bits(0xfff0_0000_0000_0001));
+        v.push(f64::from_bits(0x7fff_ffff_ffff_ffff));
+        v.push(f64::from_bits(0x7ff0_0000_0000_0001));
+        v
+    }
+
+    #[test]
+    fn ulp_steps_match_std_bit_for_bit() {
+        let up = compile_unary(|e, x| e.next_up(x));
+        let down = compile_unary(|e, x| e.next_down(x));
+        for x in cases() {
+            let (u, d) = (up.call([x, 0.0, 0.0]), down.call([x, 0.0, 0.0]));
+            if x.is_nan() {
+                // NaN passes through (possibly quieted: the sum with +0
+                // never reaches the result, the select returns x itself).
+                assert_eq!(u.to_bits(), x.to_bits(), "next_up({:#x})", x.to_bits());
+                assert_eq!(d.to_bits(), x.to_bits(), "next_down({:#x})", x.to_bits());
+            } else {
+                assert_eq!(u.to_bits(), x.next_up().to_bits(), "next_up({x:e})");
+                assert_eq!(d.to_bits(), x.next_down().to_bits(), "next_down({x:e})");
+            }
+        }
+    }
+
+    #[test]
+    fn min_max_flavours_match_the_reference() {
+        use crate::interval::{max_ignore_nan, max_nan, min_ignore_nan, min_nan};
+        for y in cases() {
+            let mn = compile_unary(move |e, x| {
+                let c = e.c(y);
+                e.min_nan(x, c)
+            });
+            let mx = compile_unary(move |e, x| {
+                let c = e.c(y);
+                e.max_nan(x, c)
+            });
+            let mi = compile_unary(move |e, x| {
+                let c = e.c(y);
+                e.min_ign(x, c)
+            });
+            let xi = compile_unary(move |e, x| {
+                let c = e.c(y);
+                e.max_ign(x, c)
+            });
+            for x in cases() {
+                let p = [x, 0.0, 0.0];
+                let same =
+                    |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
+                assert!(same(mn.call(p), min_nan(x, y)), "min_nan({x:e}, {y:e})");
+                assert!(same(mx.call(p), max_nan(x, y)), "max_nan({x:e}, {y:e})");
+                // NaN-ignoring flavours: equal, or the other zero of a
+                // signed-zero tie (see `Emitter::min_ign`).
+                let zero_tie = x == 0.0 && y == 0.0;
+                assert!(
+                    same(mi.call(p), min_ignore_nan(x, y)) || zero_tie,
+                    "min_ign({x:e}, {y:e})"
+                );
+                assert!(
+                    same(xi.call(p), max_ignore_nan(x, y)) || zero_tie,
+                    "max_ign({x:e}, {y:e})"
+                );
+            }
+        }
+    }
+}
