@@ -1034,6 +1034,11 @@ fn load_vm(text: &str) -> Option<Function> {
 fn prospero_timing() {
     let text = std::fs::read_to_string("/work/shared/models/prospero.vm").unwrap();
     let f = load_vm(&text).unwrap();
+    let clif = clif_text(&f).unwrap();
+    for part in clif.split("; evaluator: ").skip(1) {
+        let name = part.lines().next().unwrap_or("");
+        println!("{name}: {} CLIF lines", part.lines().count());
+    }
     let jit = JitEvaluator::new(&f).unwrap();
     for k in Kind::ALL {
         let t = std::time::Instant::now();

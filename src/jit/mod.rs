@@ -351,10 +351,29 @@ fn define(
 /// Compiles `kind` for `f` into its own module.
 fn compile<F: EntryFn>(kind: Kind, f: &Function, live: &[bool]) -> Result<Code<F>, JitError> {
     let (mut module, shim_ids) = new_module()?;
+    match define_all(kind, f, live, &mut module, &shim_ids) {
+        Ok(id) => {
+            Code::new(module, id).ok_or_else(|| JitError::new(kind.name(), "signature mismatch"))
+        }
+        Err(e) => {
+            raw::discard(module);
+            Err(e)
+        }
+    }
+}
+
+/// Defines `kind` (and the body a batch kind calls) and finalizes `module`.
+fn define_all(
+    kind: Kind,
+    f: &Function,
+    live: &[bool],
+    module: &mut JITModule,
+    shim_ids: &[FuncId; 12],
+) -> Result<FuncId, JitError> {
     let body = match batch_body(kind) {
         Some(bk) => {
-            let bid = declare_body(&mut module, bk)?;
-            define(bk, f, live, &mut module, &shim_ids, bid, None)?;
+            let bid = declare_body(module, bk)?;
+            define(bk, f, live, module, shim_ids, bid, None)?;
             Some(bid)
         }
         None => None,
@@ -363,11 +382,11 @@ fn compile<F: EntryFn>(kind: Kind, f: &Function, live: &[bool]) -> Result<Code<F
     let id = module
         .declare_function(kind.name(), Linkage::Local, &sig)
         .map_err(|e| JitError::new(kind.name(), e))?;
-    define(kind, f, live, &mut module, &shim_ids, id, body)?;
+    define(kind, f, live, module, shim_ids, id, body)?;
     module
         .finalize_definitions()
         .map_err(|e| JitError::new(kind.name(), e))?;
-    Code::new(module, id).ok_or_else(|| JitError::new(kind.name(), "signature mismatch"))
+    Ok(id)
 }
 
 /// The CLIF (Cranelift IR, before optimisation) of every evaluator kind of

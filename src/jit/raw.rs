@@ -108,6 +108,7 @@ impl<F: EntryFn> Code<F> {
         if decl.signature != F::signature(module.isa().default_call_conv())
             || size_of::<F>() != size_of::<*const u8>()
         {
+            discard(module);
             return None;
         }
         let entry = module.get_finalized_function(id);
@@ -120,6 +121,13 @@ impl<F: EntryFn> Code<F> {
             entry,
         })
     }
+}
+
+/// Frees a module whose functions are never called (a failed compilation).
+pub(crate) fn discard(module: JITModule) {
+    // SAFETY: no pointer into this module's memory was ever handed out:
+    // `Code::new`, the only place that takes one, consumes the module.
+    unsafe { module.free_memory() }
 }
 
 impl<F> Drop for Code<F> {
