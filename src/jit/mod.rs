@@ -1,1 +1,712 @@
 //! Cranelift JIT: native point, interval and gradient evaluators.
+//!
+//! [`JitEvaluator`] compiles each evaluator kind of [`crate::eval::Evaluator`]
+//! on its first use (so a scene pays only for what it needs) and gives the
+//! same answers as the reference in [`crate::ir::interp`] and
+//! [`crate::interval`]: point values bit for bit (NaN payloads aside),
+//! intervals bit for bit for the arithmetic ops, and transcendentals through
+//! `extern "C"` calls to the very Rust functions the reference uses.
+//!
+//! ```
+//! use ibeam::eval::Evaluator;
+//! use ibeam::ir::{BinaryOp, Builder, Var};
+//! let mut b = Builder::new();
+//! let (x, y) = (b.var(Var::X), b.var(Var::Y));
+//! let r = b.binary(BinaryOp::Mul, x, y);
+//! let f = b.finish(r);
+//! let jit = ibeam::jit::JitEvaluator::new(&f).unwrap();
+//! assert_eq!(jit.point([2.0, 3.0, 0.0]), 6.0);
+//! assert_eq!(jit.compile_times().len(), 1); // only `point` was compiled
+//! ```
+//!
+//! Layout: `emit` holds the CLIF building blocks (ulp stepping, min/max,
+//! interval ops), `lower` the sweep over the IR per kind, `shims` the
+//! callbacks into Rust, and `raw` the only `unsafe` code (owning JIT memory
+//! and calling it).
+
+mod emit;
+mod lower;
+mod raw;
+mod shims;
+
+use std::fmt;
+use std::sync::{Arc, OnceLock};
+use std::time::{Duration, Instant};
+
+use cranelift_codegen::Context;
+use cranelift_codegen::ir::{self, BlockArg, InstBuilder, UserFuncName, condcodes::IntCC, types};
+use cranelift_codegen::isa::OwnedTargetIsa;
+use cranelift_codegen::settings::{self, Configurable};
+use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
+use cranelift_jit::{JITBuilder, JITModule};
+use cranelift_module::{FuncId, Linkage, Module, default_libcall_names};
+
+use crate::eval::{Evaluator, Grad, IntervalGrad};
+use crate::interval::Interval;
+use crate::ir::Function;
+use emit::{Emitter, Iv, ShimRefs};
+use raw::{Code, EntryFn, IntervalBatchFn, IntervalFn, PointBatchFn, PointFn, PointGradFn};
+use shims::ShimSig;
+
+/// Why a function could not be compiled.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JitError(String);
+
+impl fmt::Display for JitError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "JIT compilation failed: {}", self.0)
+    }
+}
+
+impl std::error::Error for JitError {}
+
+impl JitError {
+    fn new(what: &str, e: impl fmt::Display) -> JitError {
+        JitError(format!("{what}: {e}"))
+    }
+}
+
+/// One evaluator kind; each is compiled separately and lazily.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// f at a point.
+    Point,
+    /// f and its gradient at a point.
+    PointGrad,
+    /// An interval of f over a box.
+    Interval,
+    /// Intervals of f and its gradient over a box.
+    IntervalGrad,
+    /// f at many points (a loop around the point body).
+    PointBatch,
+    /// Intervals of f over many boxes.
+    IntervalBatch,
+}
+
+impl Kind {
+    /// Every kind, in the order of [`clif_text`] and [`JitEvaluator::compile_times`].
+    pub const ALL: [Kind; 6] = [
+        Kind::Point,
+        Kind::PointGrad,
+        Kind::Interval,
+        Kind::IntervalGrad,
+        Kind::PointBatch,
+        Kind::IntervalBatch,
+    ];
+
+    /// The name used in reports and CLIF headers.
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Point => "point",
+            Kind::PointGrad => "point_grad",
+            Kind::Interval => "interval",
+            Kind::IntervalGrad => "interval_grad",
+            Kind::PointBatch => "point_batch",
+            Kind::IntervalBatch => "interval_batch",
+        }
+    }
+
+    fn signature(self, cc: cranelift_codegen::isa::CallConv) -> ir::Signature {
+        match self {
+            Kind::Point => PointFn::signature(cc),
+            Kind::PointGrad => PointGradFn::signature(cc),
+            Kind::Interval | Kind::IntervalGrad => IntervalFn::signature(cc),
+            Kind::PointBatch => PointBatchFn::signature(cc),
+            Kind::IntervalBatch => IntervalBatchFn::signature(cc),
+        }
+    }
+}
+
+/// The host ISA, built once per process.
+///
+/// `opt_level=none`: measured on prospero (7591 ops, release build), the
+/// e-graph optimiser of `speed` made compilation 2-5x slower *and* the code
+/// slower (point 2.7 vs 1.9 µs, interval 40 vs 26 µs), because global value
+/// numbering merges every use of a constant such as 0.0 or +inf into one
+/// value live across the whole function, which is exactly the long live
+/// range that the register allocator handles badly (see `lower::WINDOW`).
+/// Our input is already hash-consed and constant-folded, so the optimiser
+/// has little left to find; instruction selection (which turns our
+/// `select(fcmp ...)` shapes into `minsd`/`maxsd`) runs at every level.
+/// The verifier runs in debug builds only (it checks our own codegen, which
+/// the test suite exercises in debug builds).
+fn isa() -> Result<OwnedTargetIsa, JitError> {
+    static ISA: OnceLock<Result<OwnedTargetIsa, JitError>> = OnceLock::new();
+    ISA.get_or_init(|| {
+        let mut flags = settings::builder();
+        let set = |fb: &mut settings::Builder, k: &str, v: &str| {
+            fb.set(k, v).map_err(|e| JitError::new(k, e))
+        };
+        set(&mut flags, "opt_level", "none")?;
+        set(&mut flags, "use_colocated_libcalls", "false")?;
+        set(&mut flags, "is_pic", "false")?;
+        let verify = if cfg!(debug_assertions) {
+            "true"
+        } else {
+            "false"
+        };
+        set(&mut flags, "enable_verifier", verify)?;
+        // Frames stay small (spill slots are reused), but probe anyway so a
+        // large one can never skip a guard page.
+        set(&mut flags, "enable_probestack", "true")?;
+        set(&mut flags, "probestack_strategy", "inline")?;
+        let builder = cranelift_native::builder().map_err(|e| JitError::new("host ISA", e))?;
+        builder
+            .finish(settings::Flags::new(flags))
+            .map_err(|e| JitError::new("host ISA", e))
+    })
+    .clone()
+}
+
+/// A fresh module that knows every shim symbol, and the shims declared in it.
+fn new_module() -> Result<(JITModule, [FuncId; 12]), JitError> {
+    let isa = isa()?;
+    let cc = isa.default_call_conv();
+    let mut jb = JITBuilder::with_isa(isa, default_libcall_names());
+    let all = shims::all();
+    for (name, _, ptr) in all {
+        jb.symbol(name, ptr);
+    }
+    let mut module = JITModule::new(jb);
+    let mut ids = Vec::with_capacity(all.len());
+    for (name, sig, _) in all {
+        let mut s = ir::Signature::new(cc);
+        let (params, rets) = match sig {
+            ShimSig::PointUnary => (1, 1),
+            ShimSig::PointBinary => (2, 1),
+            ShimSig::IntervalUnary => (2, 2),
+            ShimSig::IntervalBinary => (4, 2),
+        };
+        s.params
+            .extend((0..params).map(|_| ir::AbiParam::new(types::F64)));
+        s.returns
+            .extend((0..rets).map(|_| ir::AbiParam::new(types::F64)));
+        let id = module
+            .declare_function(name, Linkage::Import, &s)
+            .map_err(|e| JitError::new(name, e))?;
+        ids.push(id);
+    }
+    let ids: [FuncId; 12] = ids
+        .try_into()
+        .map_err(|_| JitError("shim table size".into()))?;
+    Ok((module, ids))
+}
+
+/// Builds the CLIF function of `kind` for `f` (not yet compiled).
+fn build(
+    kind: Kind,
+    f: &Function,
+    live: &[bool],
+    module: &mut JITModule,
+    shim_ids: &[FuncId; 12],
+    body: Option<FuncId>,
+) -> ir::Function {
+    let cc = module.isa().default_call_conv();
+    let mut func =
+        ir::Function::with_name_signature(UserFuncName::user(0, kind as u32), kind.signature(cc));
+    let fe_config = module.isa().frontend_config();
+    let r = shim_ids.map(|id| module.declare_func_in_func(id, &mut func));
+    let callee = body.map(|id| module.declare_func_in_func(id, &mut func));
+    let shims = ShimRefs {
+        point_unary: [r[0], r[1], r[2], r[3]],
+        point_binary: [r[4], r[5]],
+        interval_unary: [r[6], r[7], r[8], r[9]],
+        interval_binary: [r[10], r[11]],
+    };
+    let mut fctx = FunctionBuilderContext::new();
+    let mut b = FunctionBuilder::new(&mut func, &mut fctx);
+    let entry = b.create_block();
+    b.append_block_params_for_function_params(entry);
+    b.switch_to_block(entry);
+    b.seal_block(entry);
+    let params = b.block_params(entry).to_vec();
+    let load_box = |e: &mut Emitter, p: ir::Value| {
+        [0, 1, 2].map(|k| Iv {
+            lo: e.load(p, 16 * k),
+            hi: e.load(p, 16 * k + 8),
+        })
+    };
+    match kind {
+        Kind::Point => {
+            let mut e = Emitter { b: &mut b, shims };
+            let v = lower::point(&mut e, f, live, [params[0], params[1], params[2]]);
+            b.ins().return_(&[v]);
+        }
+        Kind::PointGrad => {
+            let mut e = Emitter { b: &mut b, shims };
+            let (v, d) = lower::grad(&mut e, f, live, [params[0], params[1], params[2]]);
+            let out = params[3];
+            e.store(v, out, 0);
+            for (k, dk) in d.into_iter().enumerate() {
+                let dk = dk.unwrap_or_else(|| e.c(0.0));
+                e.store(dk, out, 8 * (k as i32 + 1));
+            }
+            b.ins().return_(&[]);
+        }
+        Kind::Interval => {
+            let mut e = Emitter { b: &mut b, shims };
+            let bx = load_box(&mut e, params[0]);
+            let v = lower::interval(&mut e, f, live, bx);
+            e.store(v.lo, params[1], 0);
+            e.store(v.hi, params[1], 8);
+            b.ins().return_(&[]);
+        }
+        Kind::IntervalGrad => {
+            let mut e = Emitter { b: &mut b, shims };
+            let bx = load_box(&mut e, params[0]);
+            let (v, d) = lower::grad(&mut e, f, live, bx);
+            let out = params[1];
+            e.store(v.lo, out, 0);
+            e.store(v.hi, out, 8);
+            for (k, dk) in d.into_iter().enumerate() {
+                let dk = dk.unwrap_or_else(|| e.iv_const(0.0));
+                let off = 16 * (k as i32 + 1);
+                e.store(dk.lo, out, off);
+                e.store(dk.hi, out, off + 8);
+            }
+            b.ins().return_(&[]);
+        }
+        Kind::PointBatch | Kind::IntervalBatch => {
+            let n = *params.last().expect("count parameter");
+            let header = b.create_block();
+            let body = b.create_block();
+            let exit = b.create_block();
+            let i_param = b.append_block_param(header, types::I64);
+            let zero = b.ins().iconst(types::I64, 0);
+            b.ins().jump(header, &[BlockArg::Value(zero)]);
+            b.switch_to_block(header);
+            let more = b.ins().icmp(IntCC::UnsignedLessThan, i_param, n);
+            b.ins().brif(more, body, &[], exit, &[]);
+            b.switch_to_block(body);
+            b.seal_block(body);
+            // The loop calls the single-evaluation function (compiled into
+            // the same module) rather than inlining its body: the call costs
+            // a few ns against the microseconds a large body takes, and the
+            // loop stays small enough to read in `--clif` output.
+            let callee = callee.expect("batch kinds are built with a body function");
+            if kind == Kind::PointBatch {
+                let off = b.ins().ishl_imm_u(i_param, 3);
+                let addr = |b: &mut FunctionBuilder, base: ir::Value| b.ins().iadd(base, off);
+                let ptrs = [0, 1, 2, 3].map(|k| addr(&mut b, params[k]));
+                let mut e = Emitter { b: &mut b, shims };
+                let xyz = [0, 1, 2].map(|k| e.load(ptrs[k], 0));
+                let call = b.ins().call(callee, &xyz);
+                let v = b.inst_results(call)[0];
+                let mut e = Emitter { b: &mut b, shims };
+                e.store(v, ptrs[3], 0);
+            } else {
+                let in_off = b.ins().imul_imm_u(i_param, 48);
+                let out_off = b.ins().ishl_imm_u(i_param, 4);
+                let inp = b.ins().iadd(params[0], in_off);
+                let outp = b.ins().iadd(params[1], out_off);
+                b.ins().call(callee, &[inp, outp]);
+            }
+            let next = b.ins().iadd_imm_u(i_param, 1);
+            b.ins().jump(header, &[BlockArg::Value(next)]);
+            b.seal_block(header);
+            b.switch_to_block(exit);
+            b.seal_block(exit);
+            b.ins().return_(&[]);
+        }
+    }
+    b.finalize(fe_config);
+    func
+}
+
+/// The single-evaluation kind a batch kind loops over.
+fn batch_body(kind: Kind) -> Option<Kind> {
+    match kind {
+        Kind::PointBatch => Some(Kind::Point),
+        Kind::IntervalBatch => Some(Kind::Interval),
+        _ => None,
+    }
+}
+
+/// Declares the body function of a batch kind in `module`.
+fn declare_body(module: &mut JITModule, body: Kind) -> Result<FuncId, JitError> {
+    let sig = body.signature(module.isa().default_call_conv());
+    let name = format!("{}_body", body.name());
+    module
+        .declare_function(&name, Linkage::Local, &sig)
+        .map_err(|e| JitError::new(&name, e))
+}
+
+/// Builds and defines `kind` in `module` under a fresh id.
+fn define(
+    kind: Kind,
+    f: &Function,
+    live: &[bool],
+    module: &mut JITModule,
+    shim_ids: &[FuncId; 12],
+    id: FuncId,
+    body: Option<FuncId>,
+) -> Result<(), JitError> {
+    let func = build(kind, f, live, module, shim_ids, body);
+    let mut ctx = Context::for_function(func);
+    module
+        .define_function(id, &mut ctx)
+        .map_err(|e| JitError::new(kind.name(), format!("{e:?}")))
+}
+
+/// Compiles `kind` for `f` into its own module.
+fn compile<F: EntryFn>(kind: Kind, f: &Function, live: &[bool]) -> Result<Code<F>, JitError> {
+    let (mut module, shim_ids) = new_module()?;
+    match define_all(kind, f, live, &mut module, &shim_ids) {
+        Ok(id) => {
+            Code::new(module, id).ok_or_else(|| JitError::new(kind.name(), "signature mismatch"))
+        }
+        Err(e) => {
+            raw::discard(module);
+            Err(e)
+        }
+    }
+}
+
+/// Defines `kind` (and the body a batch kind calls) and finalizes `module`.
+fn define_all(
+    kind: Kind,
+    f: &Function,
+    live: &[bool],
+    module: &mut JITModule,
+    shim_ids: &[FuncId; 12],
+) -> Result<FuncId, JitError> {
+    let body = match batch_body(kind) {
+        Some(bk) => {
+            let bid = declare_body(module, bk)?;
+            define(bk, f, live, module, shim_ids, bid, None)?;
+            Some(bid)
+        }
+        None => None,
+    };
+    let sig = kind.signature(module.isa().default_call_conv());
+    let id = module
+        .declare_function(kind.name(), Linkage::Local, &sig)
+        .map_err(|e| JitError::new(kind.name(), e))?;
+    define(kind, f, live, module, shim_ids, id, body)?;
+    module
+        .finalize_definitions()
+        .map_err(|e| JitError::new(kind.name(), e))?;
+    Ok(id)
+}
+
+/// The CLIF (Cranelift IR, before optimisation) of every evaluator kind of
+/// `f`, each headed `; evaluator: NAME`. The batch kinds are loops that
+/// call the point or interval function.
+pub fn clif_text(f: &Function) -> Result<String, JitError> {
+    crate::ir::validate::validate(f).map_err(|e| JitError::new("invalid IR", e))?;
+    let live = lower::live_ops(f);
+    let (mut module, shim_ids) = new_module()?;
+    let mut out = String::new();
+    for kind in Kind::ALL {
+        let body = match batch_body(kind) {
+            Some(bk) => Some(declare_body(&mut module, bk)?),
+            None => None,
+        };
+        let func = build(kind, f, &live, &mut module, &shim_ids, body);
+        out.push_str(&format!(
+            "; evaluator: {}\n{}\n",
+            kind.name(),
+            func.display()
+        ));
+    }
+    Ok(out)
+}
+
+/// A lazily compiled evaluator kind and how long its compilation took.
+struct Slot<F> {
+    code: Result<Code<F>, JitError>,
+    time: Duration,
+}
+
+/// Native evaluators of one function, each kind compiled on first use.
+///
+/// If Cranelift rejects a kind (an internal bug, never bad input: the IR is
+/// validated in [`JitEvaluator::new`]), that kind answers with NaN points and
+/// whole-line intervals, which are sound; [`JitEvaluator::compile_all`]
+/// reports the error.
+pub struct JitEvaluator {
+    f: Arc<Function>,
+    live: Arc<[bool]>,
+    point: OnceLock<Slot<PointFn>>,
+    point_grad: OnceLock<Slot<PointGradFn>>,
+    interval: OnceLock<Slot<IntervalFn>>,
+    interval_grad: OnceLock<Slot<IntervalFn>>,
+    point_batch: OnceLock<Slot<PointBatchFn>>,
+    interval_batch: OnceLock<Slot<IntervalBatchFn>>,
+}
+
+fn get<'a, F: EntryFn>(
+    cell: &'a OnceLock<Slot<F>>,
+    kind: Kind,
+    f: &Function,
+    live: &[bool],
+) -> Option<&'a Code<F>> {
+    cell.get_or_init(|| {
+        let t = Instant::now();
+        let code = compile(kind, f, live);
+        Slot {
+            code,
+            time: t.elapsed(),
+        }
+    })
+    .code
+    .as_ref()
+    .ok()
+}
+
+impl JitEvaluator {
+    /// Prepares an evaluator for `f` (validated here); compiles nothing yet.
+    pub fn new(f: &Function) -> Result<JitEvaluator, JitError> {
+        crate::ir::validate::validate(f).map_err(|e| JitError::new("invalid IR", e))?;
+        isa()?;
+        Ok(JitEvaluator {
+            live: lower::live_ops(f).into(),
+            f: Arc::new(f.clone()),
+            point: OnceLock::new(),
+            point_grad: OnceLock::new(),
+            interval: OnceLock::new(),
+            interval_grad: OnceLock::new(),
+            point_batch: OnceLock::new(),
+            interval_batch: OnceLock::new(),
+        })
+    }
+
+    /// The function being evaluated.
+    pub fn function(&self) -> &Function {
+        &self.f
+    }
+
+    fn slot_info(&self, kind: Kind) -> Option<(Duration, Option<&JitError>)> {
+        fn info<F>(c: &OnceLock<Slot<F>>) -> Option<(Duration, Option<&JitError>)> {
+            c.get().map(|s| (s.time, s.code.as_ref().err()))
+        }
+        match kind {
+            Kind::Point => info(&self.point),
+            Kind::PointGrad => info(&self.point_grad),
+            Kind::Interval => info(&self.interval),
+            Kind::IntervalGrad => info(&self.interval_grad),
+            Kind::PointBatch => info(&self.point_batch),
+            Kind::IntervalBatch => info(&self.interval_batch),
+        }
+    }
+
+    /// The kinds compiled so far and how long each took to compile.
+    pub fn compile_times(&self) -> Vec<(&'static str, Duration)> {
+        Kind::ALL
+            .into_iter()
+            .filter_map(|k| self.slot_info(k).map(|(t, _)| (k.name(), t)))
+            .collect()
+    }
+
+    /// Compiles the given kind now (if not yet done).
+    pub fn compile(&self, kind: Kind) -> Result<(), JitError> {
+        let (f, l) = (&*self.f, &*self.live);
+        match kind {
+            Kind::Point => drop(get(&self.point, kind, f, l)),
+            Kind::PointGrad => drop(get(&self.point_grad, kind, f, l)),
+            Kind::Interval => drop(get(&self.interval, kind, f, l)),
+            Kind::IntervalGrad => drop(get(&self.interval_grad, kind, f, l)),
+            Kind::PointBatch => drop(get(&self.point_batch, kind, f, l)),
+            Kind::IntervalBatch => drop(get(&self.interval_batch, kind, f, l)),
+        }
+        match self.slot_info(kind) {
+            Some((_, Some(e))) => Err(e.clone()),
+            _ => Ok(()),
+        }
+    }
+
+    /// Compiles every kind (for `ibeam ir --stats`) and returns the
+    /// compile time of each, or the first error.
+    pub fn compile_all(&self) -> Result<Vec<(&'static str, Duration)>, JitError> {
+        for kind in Kind::ALL {
+            self.compile(kind)?;
+        }
+        Ok(self.compile_times())
+    }
+}
+
+impl Evaluator for JitEvaluator {
+    fn point(&self, p: [f64; 3]) -> f64 {
+        match get(&self.point, Kind::Point, &self.f, &self.live) {
+            Some(c) => c.call(p),
+            None => f64::NAN,
+        }
+    }
+
+    fn point_grad(&self, p: [f64; 3]) -> Grad {
+        match get(&self.point_grad, Kind::PointGrad, &self.f, &self.live) {
+            Some(c) => {
+                let r = c.call(p);
+                Grad {
+                    v: r[0],
+                    d: [r[1], r[2], r[3]],
+                }
+            }
+            None => Grad {
+                v: f64::NAN,
+                d: [f64::NAN; 3],
+            },
+        }
+    }
+
+    fn interval(&self, b: [Interval; 3]) -> Interval {
+        match get(&self.interval, Kind::Interval, &self.f, &self.live) {
+            Some(c) => c.call_interval(&b),
+            None => Interval::ENTIRE,
+        }
+    }
+
+    fn interval_grad(&self, b: [Interval; 3]) -> IntervalGrad {
+        match get(&self.interval_grad, Kind::IntervalGrad, &self.f, &self.live) {
+            Some(c) => c.call_interval_grad(&b),
+            None => IntervalGrad {
+                v: Interval::ENTIRE,
+                d: [Interval::ENTIRE; 3],
+            },
+        }
+    }
+
+    /// Evaluates `min(len)` points of the four slices in one native loop.
+    fn point_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
+        match get(&self.point_batch, Kind::PointBatch, &self.f, &self.live) {
+            Some(c) => c.call(xs, ys, zs, out),
+            None => out.fill(f64::NAN),
+        }
+    }
+
+    /// Evaluates `min(len)` boxes in one native loop.
+    fn interval_batch(&self, boxes: &[[Interval; 3]], out: &mut [Interval]) {
+        match get(
+            &self.interval_batch,
+            Kind::IntervalBatch,
+            &self.f,
+            &self.live,
+        ) {
+            Some(c) => c.call(boxes, out),
+            None => out.fill(Interval::ENTIRE),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Compiles `x -> emit(x)` as a point-signature function.
+    fn compile_unary(emit: impl Fn(&mut Emitter, ir::Value) -> ir::Value) -> Code<PointFn> {
+        let (mut module, shim_ids) = new_module().unwrap();
+        let cc = module.isa().default_call_conv();
+        let sig = PointFn::signature(cc);
+        let mut func = ir::Function::with_name_signature(UserFuncName::user(0, 0), sig.clone());
+        let r = shim_ids.map(|id| module.declare_func_in_func(id, &mut func));
+        let shims = ShimRefs {
+            point_unary: [r[0], r[1], r[2], r[3]],
+            point_binary: [r[4], r[5]],
+            interval_unary: [r[6], r[7], r[8], r[9]],
+            interval_binary: [r[10], r[11]],
+        };
+        let fe = module.isa().frontend_config();
+        let mut fctx = FunctionBuilderContext::new();
+        let mut b = FunctionBuilder::new(&mut func, &mut fctx);
+        let entry = b.create_block();
+        b.append_block_params_for_function_params(entry);
+        b.switch_to_block(entry);
+        b.seal_block(entry);
+        let x = b.block_params(entry)[0];
+        let mut e = Emitter { b: &mut b, shims };
+        let v = emit(&mut e, x);
+        b.ins().return_(&[v]);
+        b.finalize(fe);
+        let id = module.declare_function("t", Linkage::Local, &sig).unwrap();
+        let mut ctx = Context::for_function(func);
+        module.define_function(id, &mut ctx).unwrap();
+        module.finalize_definitions().unwrap();
+        Code::new(module, id).unwrap()
+    }
+
+    const SPECIAL: [f64; 14] = [
+        0.0,
+        -0.0,
+        5e-324,
+        -5e-324,
+        f64::MIN_POSITIVE,
+        1.0,
+        -1.0,
+        f64::MAX,
+        f64::MIN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NAN,
+        -f64::NAN,
+        1e-310,
+    ];
+
+    /// Every bit pattern class the ulp step can meet, NaN payloads included
+    /// (a signalling NaN next to -inf, and one next to -0 in bits).
+    fn cases() -> Vec<f64> {
+        let mut v = SPECIAL.to_vec();
+        v.push(f64::from_bits(0xfff0_0000_0000_0001));
+        v.push(f64::from_bits(0x7fff_ffff_ffff_ffff));
+        v.push(f64::from_bits(0x7ff0_0000_0000_0001));
+        v
+    }
+
+    #[test]
+    fn ulp_steps_match_std_bit_for_bit() {
+        let up = compile_unary(|e, x| e.next_up(x));
+        let down = compile_unary(|e, x| e.next_down(x));
+        for x in cases() {
+            let (u, d) = (up.call([x, 0.0, 0.0]), down.call([x, 0.0, 0.0]));
+            if x.is_nan() {
+                // NaN passes through (possibly quieted: the sum with +0
+                // never reaches the result, the select returns x itself).
+                assert_eq!(u.to_bits(), x.to_bits(), "next_up({:#x})", x.to_bits());
+                assert_eq!(d.to_bits(), x.to_bits(), "next_down({:#x})", x.to_bits());
+            } else {
+                assert_eq!(u.to_bits(), x.next_up().to_bits(), "next_up({x:e})");
+                assert_eq!(d.to_bits(), x.next_down().to_bits(), "next_down({x:e})");
+            }
+        }
+    }
+
+    #[test]
+    fn min_max_flavours_match_the_reference() {
+        use crate::interval::{max_ignore_nan, max_nan, min_ignore_nan, min_nan};
+        for y in cases() {
+            let mn = compile_unary(move |e, x| {
+                let c = e.c(y);
+                e.min_nan(x, c)
+            });
+            let mx = compile_unary(move |e, x| {
+                let c = e.c(y);
+                e.max_nan(x, c)
+            });
+            let mi = compile_unary(move |e, x| {
+                let c = e.c(y);
+                e.min_ign(x, c)
+            });
+            let xi = compile_unary(move |e, x| {
+                let c = e.c(y);
+                e.max_ign(x, c)
+            });
+            for x in cases() {
+                let p = [x, 0.0, 0.0];
+                let same =
+                    |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
+                assert!(same(mn.call(p), min_nan(x, y)), "min_nan({x:e}, {y:e})");
+                assert!(same(mx.call(p), max_nan(x, y)), "max_nan({x:e}, {y:e})");
+                // NaN-ignoring flavours: equal, or the other zero of a
+                // signed-zero tie (see `Emitter::min_ign`).
+                let zero_tie = x == 0.0 && y == 0.0;
+                assert!(
+                    same(mi.call(p), min_ignore_nan(x, y)) || zero_tie,
+                    "min_ign({x:e}, {y:e})"
+                );
+                assert!(
+                    same(xi.call(p), max_ignore_nan(x, y)) || zero_tie,
+                    "max_ign({x:e}, {y:e})"
+                );
+            }
+        }
+    }
+}

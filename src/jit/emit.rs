@@ -1,0 +1,501 @@
+//! Small CLIF building blocks shared by every evaluator kind: ulp stepping,
+//! the min/max flavours, and the interval ops of [`crate::interval`].
+//!
+//! Every helper here mirrors one function of `crate::interval` or
+//! `crate::ir::interp` so that the native code gives the same bits; the
+//! comments say where (and why) a lowering may differ.
+
+use cranelift_codegen::ir::condcodes::FloatCC;
+use cranelift_codegen::ir::{FuncRef, InstBuilder, MemFlagsData, Value, types};
+use cranelift_frontend::FunctionBuilder;
+
+use crate::ir::{BinaryOp, UnaryOp};
+
+/// An interval as two SSA values (lower, upper bound).
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct Iv {
+    pub lo: Value,
+    pub hi: Value,
+}
+
+/// The transcendental shims imported into the function being built.
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct ShimRefs {
+    /// Point shims: exp, ln, sin, cos (f64 -> f64).
+    pub point_unary: [FuncRef; 4],
+    /// Point shims: atan2, pow ((f64, f64) -> f64).
+    pub point_binary: [FuncRef; 2],
+    /// Interval shims: exp, ln, sin, cos ((lo, hi) -> (lo, hi)).
+    pub interval_unary: [FuncRef; 4],
+    /// Interval shims: atan2, pow ((lo, hi, lo, hi) -> (lo, hi)).
+    pub interval_binary: [FuncRef; 2],
+}
+
+/// Position of a transcendental unary op in [`ShimRefs`] arrays.
+pub(crate) fn unary_shim_index(op: UnaryOp) -> Option<usize> {
+    match op {
+        UnaryOp::Exp => Some(0),
+        UnaryOp::Ln => Some(1),
+        UnaryOp::Sin => Some(2),
+        UnaryOp::Cos => Some(3),
+        _ => None,
+    }
+}
+
+/// Position of a transcendental binary op in [`ShimRefs`] arrays.
+pub(crate) fn binary_shim_index(op: BinaryOp) -> Option<usize> {
+    match op {
+        BinaryOp::Atan2 => Some(0),
+        BinaryOp::Pow => Some(1),
+        _ => None,
+    }
+}
+
+/// A function builder plus the shims it may call.
+pub(crate) struct Emitter<'a, 'b> {
+    pub b: &'a mut FunctionBuilder<'b>,
+    pub shims: ShimRefs,
+}
+
+impl Emitter<'_, '_> {
+    pub fn c(&mut self, v: f64) -> Value {
+        self.b.ins().f64const(v)
+    }
+
+    pub fn add(&mut self, a: Value, b: Value) -> Value {
+        self.b.ins().fadd(a, b)
+    }
+
+    pub fn sub(&mut self, a: Value, b: Value) -> Value {
+        self.b.ins().fsub(a, b)
+    }
+
+    pub fn mul(&mut self, a: Value, b: Value) -> Value {
+        self.b.ins().fmul(a, b)
+    }
+
+    pub fn div(&mut self, a: Value, b: Value) -> Value {
+        self.b.ins().fdiv(a, b)
+    }
+
+    pub fn neg(&mut self, a: Value) -> Value {
+        self.b.ins().fneg(a)
+    }
+
+    pub fn fcmp(&mut self, cc: FloatCC, a: Value, b: Value) -> Value {
+        self.b.ins().fcmp(cc, a, b)
+    }
+
+    pub fn select(&mut self, c: Value, a: Value, b: Value) -> Value {
+        self.b.ins().select(c, a, b)
+    }
+
+    pub fn load(&mut self, p: Value, offset: i32) -> Value {
+        self.b
+            .ins()
+            .load(types::F64, MemFlagsData::trusted(), p, offset)
+    }
+
+    pub fn store(&mut self, v: Value, p: Value, offset: i32) {
+        self.b.ins().store(MemFlagsData::trusted(), v, p, offset);
+    }
+
+    /// `a < b ? a : b`; the x64 backend matches exactly this shape to one
+    /// `minsd a, b`, which returns `b` when either operand is NaN and on
+    /// ties (so `minsd(-0, +0) = +0`, as `interval::min_nan` gives).
+    pub fn minsd(&mut self, a: Value, b: Value) -> Value {
+        let lt = self.fcmp(FloatCC::LessThan, a, b);
+        self.select(lt, a, b)
+    }
+
+    /// `a > b ? a : b`, one `maxsd a, b` (returns `b` on NaN and ties).
+    pub fn maxsd(&mut self, a: Value, b: Value) -> Value {
+        let gt = self.fcmp(FloatCC::LessThan, b, a);
+        self.select(gt, a, b)
+    }
+
+    /// `interval::min_nan`, the IR's `min`. `minsd` already returns `b`
+    /// (NaN) when `b` is NaN and matches the reference everywhere else
+    /// except when only `a` is NaN, which the select repairs by returning
+    /// `a`. The NaN may carry a different payload than `f64::NAN`; every
+    /// consumer only asks whether a value is NaN, so that is sound.
+    pub fn min_nan(&mut self, a: Value, b: Value) -> Value {
+        let m = self.minsd(a, b);
+        let a_nan = self.fcmp(FloatCC::Unordered, a, a);
+        self.select(a_nan, a, m)
+    }
+
+    /// `interval::max_nan`, the IR's `max` (see [`Self::min_nan`]).
+    pub fn max_nan(&mut self, a: Value, b: Value) -> Value {
+        let m = self.maxsd(a, b);
+        let a_nan = self.fcmp(FloatCC::Unordered, a, a);
+        self.select(a_nan, a, m)
+    }
+
+    /// `interval::min_ignore_nan` (`f64::min`): NaN only if both are NaN.
+    /// When `b` is NaN `minsd` gives `b`, so the select returns `a` then. On
+    /// a tie of `-0` and `+0` this may pick the other zero than `f64::min`;
+    /// the callers round the result outward with `next_down`/`next_up`,
+    /// which map both zeros to the same value, so the bits agree.
+    pub fn min_ign(&mut self, a: Value, b: Value) -> Value {
+        let m = self.minsd(a, b);
+        let b_nan = self.fcmp(FloatCC::Unordered, b, b);
+        self.select(b_nan, a, m)
+    }
+
+    /// `interval::max_ignore_nan` (see [`Self::min_ign`]).
+    pub fn max_ign(&mut self, a: Value, b: Value) -> Value {
+        let m = self.maxsd(a, b);
+        let b_nan = self.fcmp(FloatCC::Unordered, b, b);
+        self.select(b_nan, a, m)
+    }
+
+    /// `x.max(0.0)` where `x` is a `next_down` result: `maxsd x, 0` gives 0
+    /// for NaN as `f64::max` does, and `next_down` never returns `-0`, so
+    /// the signed-zero tie cannot arise.
+    pub fn clamp0(&mut self, x: Value) -> Value {
+        let z = self.c(0.0);
+        self.maxsd(x, z)
+    }
+
+    /// `f64::next_up` on the bits, without touching MXCSR: adding +0 turns
+    /// -0 into +0 (round-to-nearest), then one integer step away from or
+    /// towards zero by the sign (`+1` for positive, `-1` for negative bit
+    /// patterns; +0 becomes the smallest subnormal, `MAX` becomes +inf,
+    /// -inf becomes `-MAX`). NaN and +inf, where that step is wrong, are
+    /// returned unchanged as the reference does.
+    pub fn next_up(&mut self, v: Value) -> Value {
+        let z = self.c(0.0);
+        let s = self.add(v, z);
+        let bits = self.b.ins().bitcast(types::I64, MemFlagsData::new(), s);
+        let sign = self.b.ins().sshr_imm_u(bits, 63);
+        let step = self.b.ins().bor_imm_u(sign, 1);
+        let nb = self.b.ins().iadd(bits, step);
+        let r = self.b.ins().bitcast(types::F64, MemFlagsData::new(), nb);
+        let inf = self.c(f64::INFINITY);
+        let finite_or_neg_inf = self.fcmp(FloatCC::LessThan, v, inf);
+        self.select(finite_or_neg_inf, r, v)
+    }
+
+    /// `f64::next_down(v) = -next_up(-v)`, exactly, NaN included.
+    pub fn next_down(&mut self, v: Value) -> Value {
+        let n = self.neg(v);
+        let u = self.next_up(n);
+        self.neg(u)
+    }
+
+    /// Whether an interval is EMPTY (either bound NaN).
+    pub fn is_empty(&mut self, a: Iv) -> Value {
+        self.fcmp(FloatCC::Unordered, a.lo, a.hi)
+    }
+
+    /// `if cond { EMPTY } else { r }`.
+    pub fn empty_if(&mut self, cond: Value, r: Iv) -> Iv {
+        let nan = self.c(f64::NAN);
+        Iv {
+            lo: self.select(cond, nan, r.lo),
+            hi: self.select(cond, nan, r.hi),
+        }
+    }
+
+    pub fn iv_const(&mut self, v: f64) -> Iv {
+        let c = self.c(v);
+        Iv { lo: c, hi: c }
+    }
+
+    pub fn iv_neg(&mut self, a: Iv) -> Iv {
+        Iv {
+            lo: self.neg(a.hi),
+            hi: self.neg(a.lo),
+        }
+    }
+
+    pub fn iv_add(&mut self, a: Iv, b: Iv) -> Iv {
+        let lo = self.add(a.lo, b.lo);
+        let hi = self.add(a.hi, b.hi);
+        Iv {
+            lo: self.next_down(lo),
+            hi: self.next_up(hi),
+        }
+    }
+
+    pub fn iv_sub(&mut self, a: Iv, b: Iv) -> Iv {
+        let lo = self.sub(a.lo, b.hi);
+        let hi = self.sub(a.hi, b.lo);
+        Iv {
+            lo: self.next_down(lo),
+            hi: self.next_up(hi),
+        }
+    }
+
+    /// Hull of four candidate bounds, NaN-ignoring, rounded outward: the
+    /// shared tail of `Interval::mul` and `Interval::div`.
+    fn hull4(&mut self, p: [Value; 4]) -> Iv {
+        let l01 = self.min_ign(p[0], p[1]);
+        let l23 = self.min_ign(p[2], p[3]);
+        let lo = self.min_ign(l01, l23);
+        let h01 = self.max_ign(p[0], p[1]);
+        let h23 = self.max_ign(p[2], p[3]);
+        let hi = self.max_ign(h01, h23);
+        Iv {
+            lo: self.next_down(lo),
+            hi: self.next_up(hi),
+        }
+    }
+
+    /// `Interval::mul`, except in one case where the reference is unsound:
+    /// when every bound product is 0·inf (`[0, 0] * [-inf, inf]`) the
+    /// NaN-ignoring hull is NaN and the reference answers EMPTY, although
+    /// `0 * b = 0` for every real `b`. Here that case gives `[0, 0]`
+    /// (EMPTY operands still give EMPTY).
+    pub fn iv_mul(&mut self, a: Iv, b: Iv) -> Iv {
+        let p = [
+            self.mul(a.lo, b.lo),
+            self.mul(a.lo, b.hi),
+            self.mul(a.hi, b.lo),
+            self.mul(a.hi, b.hi),
+        ];
+        let h = self.hull4(p);
+        let all_nan = self.fcmp(FloatCC::Unordered, h.lo, h.lo);
+        let z = self.c(0.0);
+        let r = Iv {
+            lo: self.select(all_nan, z, h.lo),
+            hi: self.select(all_nan, z, h.hi),
+        };
+        let ea = self.is_empty(a);
+        let eb = self.is_empty(b);
+        let e = self.b.ins().bor(ea, eb);
+        self.empty_if(e, r)
+    }
+
+    /// `Interval::div`, with its three cases as selects (no branches).
+    pub fn iv_div(&mut self, a: Iv, b: Iv) -> Iv {
+        let q = [
+            self.div(a.lo, b.lo),
+            self.div(a.lo, b.hi),
+            self.div(a.hi, b.lo),
+            self.div(a.hi, b.hi),
+        ];
+        let h = self.hull4(q);
+        let z = self.c(0.0);
+        let lo_le0 = self.fcmp(FloatCC::LessThanOrEqual, b.lo, z);
+        let hi_ge0 = self.fcmp(FloatCC::GreaterThanOrEqual, b.hi, z);
+        let has0 = self.b.ins().band(lo_le0, hi_ge0);
+        let ninf = self.c(f64::NEG_INFINITY);
+        let pinf = self.c(f64::INFINITY);
+        let r = Iv {
+            lo: self.select(has0, ninf, h.lo),
+            hi: self.select(has0, pinf, h.hi),
+        };
+        let lo_eq0 = self.fcmp(FloatCC::Equal, b.lo, z);
+        let hi_eq0 = self.fcmp(FloatCC::Equal, b.hi, z);
+        let zero = self.b.ins().band(lo_eq0, hi_eq0);
+        let ea = self.is_empty(a);
+        let eb = self.is_empty(b);
+        let e = self.b.ins().bor(ea, eb);
+        let e = self.b.ins().bor(e, zero);
+        self.empty_if(e, r)
+    }
+
+    /// `Interval::abs`, including its `[0, NaN]` answer for EMPTY.
+    pub fn iv_abs(&mut self, a: Iv) -> Iv {
+        let z = self.c(0.0);
+        let nonneg = self.fcmp(FloatCC::GreaterThanOrEqual, a.lo, z);
+        let nonpos = self.fcmp(FloatCC::LessThanOrEqual, a.hi, z);
+        let nlo = self.neg(a.lo);
+        let nhi = self.neg(a.hi);
+        let straddle_hi = self.max_nan(nlo, a.hi);
+        let lo2 = self.select(nonpos, nhi, z);
+        let hi2 = self.select(nonpos, nlo, straddle_hi);
+        Iv {
+            lo: self.select(nonneg, a.lo, lo2),
+            hi: self.select(nonneg, a.hi, hi2),
+        }
+    }
+
+    pub fn iv_square(&mut self, a: Iv) -> Iv {
+        let m = self.iv_abs(a);
+        let l = self.mul(m.lo, m.lo);
+        let l = self.next_down(l);
+        let h = self.mul(m.hi, m.hi);
+        let r = Iv {
+            lo: self.clamp0(l),
+            hi: self.next_up(h),
+        };
+        let e = self.is_empty(a);
+        self.empty_if(e, r)
+    }
+
+    pub fn iv_sqrt(&mut self, a: Iv) -> Iv {
+        let z = self.c(0.0);
+        let s = self.b.ins().sqrt(a.lo);
+        let s = self.next_down(s);
+        let s = self.clamp0(s);
+        let lo_le0 = self.fcmp(FloatCC::LessThanOrEqual, a.lo, z);
+        let lo = self.select(lo_le0, z, s);
+        let h = self.b.ins().sqrt(a.hi);
+        let r = Iv {
+            lo,
+            hi: self.next_up(h),
+        };
+        let e = self.is_empty(a);
+        let neg = self.fcmp(FloatCC::LessThan, a.hi, z);
+        let e = self.b.ins().bor(e, neg);
+        self.empty_if(e, r)
+    }
+
+    pub fn iv_min(&mut self, a: Iv, b: Iv) -> Iv {
+        Iv {
+            lo: self.min_nan(a.lo, b.lo),
+            hi: self.min_nan(a.hi, b.hi),
+        }
+    }
+
+    pub fn iv_max(&mut self, a: Iv, b: Iv) -> Iv {
+        Iv {
+            lo: self.max_nan(a.lo, b.lo),
+            hi: self.max_nan(a.hi, b.hi),
+        }
+    }
+
+    /// Hull of two intervals ignoring an EMPTY one (EMPTY only if both are).
+    pub fn iv_hull(&mut self, a: Iv, b: Iv) -> Iv {
+        Iv {
+            lo: self.min_ign(a.lo, b.lo),
+            hi: self.max_ign(a.hi, b.hi),
+        }
+    }
+
+    /// `interval::powi_unsigned` unrolled for the constant `n`, with
+    /// `round` applied after each multiplication.
+    fn pow_unrolled(&mut self, x: Value, mut n: u64, round: Round) -> Value {
+        let mut result: Option<Value> = None;
+        let mut base = x;
+        while n > 0 {
+            if n & 1 == 1 {
+                result = Some(match result {
+                    None => base,
+                    Some(r) => {
+                        let p = self.mul(r, base);
+                        self.round(p, round)
+                    }
+                });
+            }
+            n >>= 1;
+            if n > 0 {
+                let p = self.mul(base, base);
+                base = self.round(p, round);
+            }
+        }
+        match result {
+            Some(r) => r,
+            None => self.c(1.0),
+        }
+    }
+
+    fn round(&mut self, v: Value, round: Round) -> Value {
+        match round {
+            Round::Nearest => v,
+            Round::Up => self.next_up(v),
+            Round::DownNonNeg => {
+                let d = self.next_down(v);
+                self.clamp0(d)
+            }
+        }
+    }
+
+    /// `interval::powi_point` for the constant `n` (widened to i64 so that
+    /// the gradient's `n - 1` cannot overflow).
+    pub fn powi_point(&mut self, x: Value, n: i64) -> Value {
+        let p = self.pow_unrolled(x, n.unsigned_abs(), Round::Nearest);
+        if n < 0 {
+            let one = self.c(1.0);
+            self.div(one, p)
+        } else {
+            p
+        }
+    }
+
+    /// `Interval::powi` for the constant `n`.
+    pub fn iv_powi(&mut self, a: Iv, n: i64) -> Iv {
+        if n == 0 {
+            return self.iv_const(1.0);
+        }
+        let m = n.unsigned_abs();
+        let p = if m.is_multiple_of(2) {
+            let s = self.iv_abs(a);
+            Iv {
+                lo: self.pow_unrolled(s.lo, m, Round::DownNonNeg),
+                hi: self.pow_unrolled(s.hi, m, Round::Up),
+            }
+        } else {
+            // Odd powers are increasing: each bound keeps its sign.
+            let z = self.c(0.0);
+            let lo_pos = self.pow_unrolled(a.lo, m, Round::DownNonNeg);
+            let nlo = self.neg(a.lo);
+            let lo_neg = self.pow_unrolled(nlo, m, Round::Up);
+            let lo_neg = self.neg(lo_neg);
+            let lo_ge0 = self.fcmp(FloatCC::GreaterThanOrEqual, a.lo, z);
+            let hi_pos = self.pow_unrolled(a.hi, m, Round::Up);
+            let nhi = self.neg(a.hi);
+            let hi_neg = self.pow_unrolled(nhi, m, Round::DownNonNeg);
+            let hi_neg = self.neg(hi_neg);
+            let hi_ge0 = self.fcmp(FloatCC::GreaterThanOrEqual, a.hi, z);
+            Iv {
+                lo: self.select(lo_ge0, lo_pos, lo_neg),
+                hi: self.select(hi_ge0, hi_pos, hi_neg),
+            }
+        };
+        let p = if n < 0 {
+            let one = self.iv_const(1.0);
+            self.iv_div(one, p)
+        } else {
+            p
+        };
+        let e = self.is_empty(a);
+        self.empty_if(e, p)
+    }
+
+    /// A point transcendental through its shim.
+    pub fn call_point_unary(&mut self, i: usize, a: Value) -> Value {
+        let call = self.b.ins().call(self.shims.point_unary[i], &[a]);
+        self.b.inst_results(call)[0]
+    }
+
+    pub fn call_point_binary(&mut self, i: usize, a: Value, b: Value) -> Value {
+        let call = self.b.ins().call(self.shims.point_binary[i], &[a, b]);
+        self.b.inst_results(call)[0]
+    }
+
+    /// An interval transcendental through its shim: bounds travel as f64
+    /// arguments and come back as two f64 results (xmm0, xmm1), which is
+    /// the C ABI of a returned `#[repr(C)]` pair of doubles.
+    pub fn call_iv_unary(&mut self, i: usize, a: Iv) -> Iv {
+        let call = self
+            .b
+            .ins()
+            .call(self.shims.interval_unary[i], &[a.lo, a.hi]);
+        let r = self.b.inst_results(call);
+        Iv { lo: r[0], hi: r[1] }
+    }
+
+    pub fn call_iv_binary(&mut self, i: usize, a: Iv, b: Iv) -> Iv {
+        let call = self
+            .b
+            .ins()
+            .call(self.shims.interval_binary[i], &[a.lo, a.hi, b.lo, b.hi]);
+        let r = self.b.inst_results(call);
+        Iv { lo: r[0], hi: r[1] }
+    }
+}
+
+/// Rounding after each step of an unrolled power.
+#[derive(Copy, Clone, Debug)]
+enum Round {
+    /// Plain round-to-nearest (the point semantics).
+    Nearest,
+    /// One ulp up: an upper bound.
+    Up,
+    /// One ulp down, clamped at 0: a lower bound of a non-negative power.
+    DownNonNeg,
+}
