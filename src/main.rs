@@ -22,6 +22,8 @@ enum Command {
     Eval(cli::eval::Args),
     /// Render a scene to PNG with the guaranteed beam tracer.
     Render(cli::render::Args),
+    /// Run a benchmark and print its table (baseline in the same run).
+    Bench(cli::bench::Args),
 }
 
 // Deeply nested input is rejected by the parser, but lowering and
@@ -37,6 +39,7 @@ fn main() -> ExitCode {
             Command::Ir(a) => cli::ir::run(a),
             Command::Eval(a) => cli::eval::run(a),
             Command::Render(a) => cli::render::run(a),
+            Command::Bench(a) => cli::bench::run(a),
         });
     let result = match worker.map(|h| h.join()) {
         Ok(Ok(r)) => r,
@@ -49,5 +52,16 @@ fn main() -> ExitCode {
             eprintln!("{e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Cli;
+    use clap::CommandFactory;
+
+    #[test]
+    fn argument_definitions_are_consistent() {
+        Cli::command().debug_assert();
     }
 }

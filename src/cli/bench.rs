@@ -1,0 +1,299 @@
+//! `ibeam bench`: benchmarks that print tables with their baseline in the
+//! same run, so every speed claim in the README can be rerun.
+
+use super::{CliError, EvalKind, build_evaluator};
+use crate::eval::Evaluator;
+use crate::interval::Interval;
+use crate::ir::passes::simplify;
+use crate::jit::JitEvaluator;
+use std::hint::black_box;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+/// Arguments of `ibeam bench`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// What to measure.
+    #[command(subcommand)]
+    pub what: What,
+}
+
+/// The benchmarks.
+#[derive(clap::Subcommand, Debug)]
+pub enum What {
+    /// Evaluator throughput, interpreter against JIT, and JIT compile time.
+    Eval(EvalArgs),
+    /// Render times and rays traced: beam against per-pixel and point
+    /// sampling, with shadows as the scene sets them.
+    Render(RenderArgs),
+}
+
+/// Arguments of `ibeam bench render`.
+#[derive(clap::Args, Debug)]
+pub struct RenderArgs {
+    /// Scenes to render (default: orthocircle, metaballs, drop, tangle
+    /// cube, the CSG scene and ../shared/models/prospero.vm when present).
+    pub files: Vec<PathBuf>,
+    /// Square image sizes to render at.
+    #[arg(long, value_delimiter = ',', default_values_t = [512u32, 1024])]
+    pub sizes: Vec<u32>,
+    /// Methods to compare.
+    #[arg(long, value_delimiter = ',', default_values = ["beam", "pixel", "point"])]
+    pub methods: Vec<String>,
+    /// Steps along each ray for the point-sampling method.
+    #[arg(long, default_value_t = 256)]
+    pub steps: u32,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
+
+/// Arguments of `ibeam bench eval`.
+#[derive(clap::Args, Debug)]
+pub struct EvalArgs {
+    /// Scenes or models to measure (default: orthocircle, tangle cube and
+    /// ../shared/models/prospero.vm when present).
+    pub files: Vec<PathBuf>,
+    /// Minimum time spent on each measurement, in milliseconds.
+    #[arg(long, default_value_t = 300)]
+    pub millis: u64,
+}
+
+/// Runs `ibeam bench`.
+pub fn run(args: &Args) -> Result<(), CliError> {
+    match &args.what {
+        What::Eval(a) => bench_eval(a),
+        What::Render(a) => bench_render(a),
+    }
+}
+
+fn default_eval_files() -> Vec<PathBuf> {
+    let mut files = vec![
+        PathBuf::from("examples/orthocircle.ib"),
+        PathBuf::from("examples/tangle_cube.ib"),
+    ];
+    let prospero = PathBuf::from("../shared/models/prospero.vm");
+    if prospero.exists() {
+        files.push(prospero);
+    }
+    files
+}
+
+// A fixed xorshift stream, so every run measures the same inputs.
+struct Rng(u64);
+
+impl Rng {
+    fn next_unit(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// Calls `body` (which does `per_call` evaluations) until `min` has passed;
+/// returns evaluations per second.
+fn rate(min: Duration, per_call: usize, mut body: impl FnMut()) -> f64 {
+    body(); // warm-up: compiles a lazy JIT kind outside the timing
+    let start = Instant::now();
+    let mut calls = 0usize;
+    while start.elapsed() < min {
+        body();
+        calls += 1;
+    }
+    (calls * per_call) as f64 / start.elapsed().as_secs_f64()
+}
+
+const BATCH: usize = 1024;
+
+fn bench_eval(args: &EvalArgs) -> Result<(), CliError> {
+    let files = if args.files.is_empty() {
+        default_eval_files()
+    } else {
+        args.files.clone()
+    };
+    let min = Duration::from_millis(args.millis);
+    println!(
+        "| scene | ops | interp points/s | JIT points/s | JIT batch points/s | point speedup | interp boxes/s | JIT boxes/s | JIT batch boxes/s | box speedup | JIT compile ms (all kinds) |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for file in &files {
+        let scene = crate::lang::load_scene(file)?;
+        let object = &scene.objects[0];
+        let f = simplify(&object.function);
+        let interp = build_evaluator(&f, EvalKind::Interp)?;
+        let start = Instant::now();
+        let jit_all = JitEvaluator::new(&f)?;
+        jit_all.compile_all()?;
+        let compile_ms = start.elapsed().as_secs_f64() * 1e3;
+        let jit: &dyn Evaluator = &jit_all;
+
+        let (lo, hi) = (scene.bounds.min, scene.bounds.max);
+        let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+        let mut coord = |axis: usize| lo[axis] + (hi[axis] - lo[axis]) * rng.next_unit();
+        let points: Vec<[f64; 3]> = (0..BATCH).map(|_| [coord(0), coord(1), coord(2)]).collect();
+        // Boxes the size of a beam in a 512² render: 1/64 of the bounds.
+        let boxes: Vec<[Interval; 3]> = points
+            .iter()
+            .map(|p| {
+                let side = |axis: usize| {
+                    let w = (hi[axis] - lo[axis]) / 64.0;
+                    Interval::new(p[axis], p[axis] + w)
+                };
+                [side(0), side(1), side(2)]
+            })
+            .collect();
+        let (xs, ys, zs): (Vec<f64>, Vec<f64>, Vec<f64>) = (
+            points.iter().map(|p| p[0]).collect(),
+            points.iter().map(|p| p[1]).collect(),
+            points.iter().map(|p| p[2]).collect(),
+        );
+        let mut out = vec![0.0; BATCH];
+        let mut iout = vec![Interval::point(0.0); BATCH];
+
+        let single_points = |e: &dyn Evaluator| {
+            rate(min, BATCH, || {
+                for p in &points {
+                    black_box(e.point(black_box(*p)));
+                }
+            })
+        };
+        let single_boxes = |e: &dyn Evaluator| {
+            rate(min, BATCH, || {
+                for b in &boxes {
+                    black_box(e.interval(black_box(*b)));
+                }
+            })
+        };
+        let interp_pts = single_points(interp.as_ref());
+        let jit_pts = single_points(jit);
+        let jit_batch_pts = rate(min, BATCH, || {
+            jit.point_batch(&xs, &ys, &zs, &mut out);
+            black_box(&out);
+        });
+        let interp_boxes = single_boxes(interp.as_ref());
+        let jit_boxes = single_boxes(jit);
+        let jit_batch_boxes = rate(min, BATCH, || {
+            jit.interval_batch(&boxes, &mut iout);
+            black_box(&iout);
+        });
+        println!(
+            "| {} | {} | {} | {} | {} | {:.1}x | {} | {} | {} | {:.1}x | {:.2} |",
+            file.display(),
+            f.len(),
+            si(interp_pts),
+            si(jit_pts),
+            si(jit_batch_pts),
+            jit_pts.max(jit_batch_pts) / interp_pts,
+            si(interp_boxes),
+            si(jit_boxes),
+            si(jit_batch_boxes),
+            jit_boxes.max(jit_batch_boxes) / interp_boxes,
+            compile_ms,
+        );
+    }
+    Ok(())
+}
+
+/// A rate with an SI suffix, 3 significant digits.
+fn si(v: f64) -> String {
+    let (scaled, suffix) = if v >= 1e9 {
+        (v / 1e9, "G")
+    } else if v >= 1e6 {
+        (v / 1e6, "M")
+    } else if v >= 1e3 {
+        (v / 1e3, "k")
+    } else {
+        (v, "")
+    };
+    format!("{scaled:.3}{suffix}")
+}
+
+fn bench_render(args: &RenderArgs) -> Result<(), CliError> {
+    use crate::render::{Method, RenderOptions, render};
+    let files = if args.files.is_empty() {
+        let mut files: Vec<PathBuf> = ["orthocircle", "metaballs", "drop", "tangle_cube", "csg"]
+            .iter()
+            .map(|n| PathBuf::from(format!("examples/{n}.ib")))
+            .collect();
+        let prospero = PathBuf::from("../shared/models/prospero.vm");
+        if prospero.exists() {
+            files.push(prospero);
+        }
+        files
+    } else {
+        args.files.clone()
+    };
+    println!(
+        "| scene | size | method | time ms | rays | rays vs pixel | interval evals | point evals | shadow rays | pixels hit |"
+    );
+    println!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|");
+    for file in &files {
+        let scene = crate::lang::load_scene(file)?;
+        let evaluators = super::build_evaluators(&scene, EvalKind::Jit)?;
+        for &size in &args.sizes {
+            let mut pixel_rays = None;
+            let mut rows = Vec::new();
+            for name in &args.methods {
+                let method = match name.as_str() {
+                    "beam" => Method::Beam,
+                    "pixel" => Method::Pixel,
+                    "point" => Method::Point { steps: args.steps },
+                    other => {
+                        return Err(format!("unknown method `{other}` (beam, pixel, point)").into());
+                    }
+                };
+                let opts = RenderOptions {
+                    width: size,
+                    height: size,
+                    threads: args.threads,
+                    method,
+                    want_depth: false,
+                    want_normals: false,
+                    want_classify: false,
+                    progress: false,
+                };
+                // The first render of a scene also compiles its lazy JIT
+                // kinds; render once untimed so every row is steady-state.
+                if rows.is_empty() && pixel_rays.is_none() {
+                    render(
+                        &scene,
+                        &evaluators,
+                        &RenderOptions {
+                            width: 32,
+                            height: 32,
+                            ..opts.clone()
+                        },
+                    )?;
+                }
+                let out = render(&scene, &evaluators, &opts)?;
+                if name == "pixel" {
+                    pixel_rays = Some(out.stats.rays);
+                }
+                rows.push((name.clone(), out.stats));
+            }
+            for (name, st) in rows {
+                let ratio = match pixel_rays {
+                    Some(p) if p > 0 => format!("{:.1}%", 100.0 * st.rays as f64 / p as f64),
+                    _ => "-".into(),
+                };
+                let label = if name == "point" {
+                    format!("point ({} steps)", args.steps)
+                } else {
+                    name
+                };
+                println!(
+                    "| {} | {size}² | {label} | {:.1} | {} | {ratio} | {} | {} | {} | {} |",
+                    file.display(),
+                    st.time_ms,
+                    st.rays,
+                    st.interval_evals,
+                    st.point_evals,
+                    st.shadow_rays,
+                    st.pixels_hit,
+                );
+            }
+        }
+    }
+    Ok(())
+}
