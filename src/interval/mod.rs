@@ -112,6 +112,14 @@ pub fn max_ignore_nan(a: f64, b: f64) -> f64 {
     a.max(b)
 }
 
+/// `min(u, 0)` for an upper bound `u`, giving +0 for -0 and 0 for NaN.
+/// `f64::min(-0.0, 0.0)` picks either zero, and which one differs between
+/// debug and release builds; this keeps the bits (and the JIT) reproducible.
+#[inline]
+fn nonpositive(u: f64) -> f64 {
+    if u < 0.0 { u } else { 0.0 }
+}
+
 /// min that propagates NaN: the point semantics of the IR's `min`.
 #[inline]
 pub fn min_nan(a: f64, b: f64) -> f64 {
@@ -229,11 +237,11 @@ impl Interval {
                 if positive {
                     Interval::new(down(self.lo / d).max(0.0), f64::INFINITY)
                 } else {
-                    Interval::new(f64::NEG_INFINITY, up(self.lo / d).min(0.0))
+                    Interval::new(f64::NEG_INFINITY, nonpositive(up(self.lo / d)))
                 }
             } else if self.hi <= 0.0 {
                 if positive {
-                    Interval::new(f64::NEG_INFINITY, up(self.hi / d).min(0.0))
+                    Interval::new(f64::NEG_INFINITY, nonpositive(up(self.hi / d)))
                 } else {
                     Interval::new(down(self.hi / d).max(0.0), f64::INFINITY)
                 }

@@ -243,11 +243,9 @@ impl Emitter<'_, '_> {
         }
     }
 
-    /// `Interval::mul`, except in one case where the reference is unsound:
-    /// when every bound product is 0·inf (`[0, 0] * [-inf, inf]`) the
-    /// NaN-ignoring hull is NaN and the reference answers EMPTY, although
-    /// `0 * b = 0` for every real `b`. Here that case gives `[0, 0]`
-    /// (EMPTY operands still give EMPTY).
+    /// `Interval::mul`: when every bound product is 0·inf (one operand
+    /// `[0, 0]`, the other with only infinite bounds) the NaN-ignoring hull
+    /// is NaN and the answer is `[0, 0]`; EMPTY operands give EMPTY.
     pub fn iv_mul(&mut self, a: Iv, b: Iv) -> Iv {
         let p = [
             self.mul(a.lo, b.lo),
@@ -268,7 +266,12 @@ impl Emitter<'_, '_> {
         self.empty_if(e, r)
     }
 
-    /// `Interval::div`, with its three cases as selects (no branches).
+    /// `Interval::div`, its cases as selects (no branches): the hull of
+    /// the four quotients when 0 is outside the divisor; `[0, 0]` for a
+    /// dividend `[0, 0]` and ENTIRE for any other when 0 is strictly inside
+    /// it; a half-line bounded by `num / d` when 0 is one end of the
+    /// divisor and `d` the other (`num` the dividend end nearest 0);
+    /// EMPTY for a divisor `[0, 0]` or an EMPTY operand.
     pub fn iv_div(&mut self, a: Iv, b: Iv) -> Iv {
         let q = [
             self.div(a.lo, b.lo),
@@ -278,14 +281,50 @@ impl Emitter<'_, '_> {
         ];
         let h = self.hull4(q);
         let z = self.c(0.0);
+        let ninf = self.c(f64::NEG_INFINITY);
+        let pinf = self.c(f64::INFINITY);
+        // Half-line case: positive divisor [0, hi] (d = hi) or negative
+        // [lo, 0] (d = lo); the reference tests `o.lo == 0` first.
+        let positive = self.fcmp(FloatCC::Equal, b.lo, z);
+        let d = self.select(positive, b.hi, b.lo);
+        let a_nonneg = self.fcmp(FloatCC::GreaterThanOrEqual, a.lo, z);
+        let a_nonpos = self.fcmp(FloatCC::LessThanOrEqual, a.hi, z);
+        let num = self.select(a_nonneg, a.lo, a.hi);
+        let qd = self.div(num, d);
+        let qdown = self.next_down(qd);
+        let qdown = self.clamp0(qdown);
+        let qup = self.next_up(qd);
+        // `interval::nonpositive`: -0 and NaN (inf / inf) become +0.
+        let lt0 = self.fcmp(FloatCC::LessThan, qup, z);
+        let qup = self.select(lt0, qup, z);
+        // The bound is a lower one (result [q, inf]) when the signs agree.
+        let same_sign_pos = self.b.ins().band(a_nonneg, positive);
+        let neg_div = self.b.ins().bnot(positive);
+        let same_sign_neg = self.b.ins().band(a_nonpos, neg_div);
+        let lower = self.b.ins().bor(same_sign_pos, same_sign_neg);
+        let half_lo = self.select(lower, qdown, ninf);
+        let half_hi = self.select(lower, pinf, qup);
+        let one_sign = self.b.ins().bor(a_nonneg, a_nonpos);
+        let half_lo = self.select(one_sign, half_lo, ninf);
+        let half_hi = self.select(one_sign, half_hi, pinf);
+        // 0 strictly inside the divisor: ENTIRE.
+        let lo_lt0 = self.fcmp(FloatCC::LessThan, b.lo, z);
+        let hi_gt0 = self.fcmp(FloatCC::GreaterThan, b.hi, z);
+        let inside = self.b.ins().band(lo_lt0, hi_gt0);
+        let zlo = self.select(inside, ninf, half_lo);
+        let zhi = self.select(inside, pinf, half_hi);
+        // Dividend [0, 0] over a divisor holding 0: [0, 0].
+        let alo0 = self.fcmp(FloatCC::Equal, a.lo, z);
+        let ahi0 = self.fcmp(FloatCC::Equal, a.hi, z);
+        let a_zero = self.b.ins().band(alo0, ahi0);
+        let zlo = self.select(a_zero, z, zlo);
+        let zhi = self.select(a_zero, z, zhi);
         let lo_le0 = self.fcmp(FloatCC::LessThanOrEqual, b.lo, z);
         let hi_ge0 = self.fcmp(FloatCC::GreaterThanOrEqual, b.hi, z);
         let has0 = self.b.ins().band(lo_le0, hi_ge0);
-        let ninf = self.c(f64::NEG_INFINITY);
-        let pinf = self.c(f64::INFINITY);
         let r = Iv {
-            lo: self.select(has0, ninf, h.lo),
-            hi: self.select(has0, pinf, h.hi),
+            lo: self.select(has0, zlo, h.lo),
+            hi: self.select(has0, zhi, h.hi),
         };
         let lo_eq0 = self.fcmp(FloatCC::Equal, b.lo, z);
         let hi_eq0 = self.fcmp(FloatCC::Equal, b.hi, z);
@@ -297,7 +336,7 @@ impl Emitter<'_, '_> {
         self.empty_if(e, r)
     }
 
-    /// `Interval::abs`, including its `[0, NaN]` answer for EMPTY.
+    /// `Interval::abs` (EMPTY stays EMPTY).
     pub fn iv_abs(&mut self, a: Iv) -> Iv {
         let z = self.c(0.0);
         let nonneg = self.fcmp(FloatCC::GreaterThanOrEqual, a.lo, z);
@@ -307,10 +346,12 @@ impl Emitter<'_, '_> {
         let straddle_hi = self.max_nan(nlo, a.hi);
         let lo2 = self.select(nonpos, nhi, z);
         let hi2 = self.select(nonpos, nlo, straddle_hi);
-        Iv {
+        let r = Iv {
             lo: self.select(nonneg, a.lo, lo2),
             hi: self.select(nonneg, a.hi, hi2),
-        }
+        };
+        let e = self.is_empty(a);
+        self.empty_if(e, r)
     }
 
     pub fn iv_square(&mut self, a: Iv) -> Iv {
