@@ -371,6 +371,14 @@ impl Emitter<'_, '_> {
 
     /// `Interval::abs` (EMPTY stays EMPTY).
     pub fn iv_abs(&mut self, a: Iv) -> Iv {
+        let r = self.iv_abs_nonempty(a);
+        let e = self.is_empty(a);
+        self.empty_if(e, r)
+    }
+
+    /// `Interval::abs` for a non-EMPTY operand (for EMPTY it gives
+    /// `[0, NaN]`): square and powi test emptiness once themselves.
+    fn iv_abs_nonempty(&mut self, a: Iv) -> Iv {
         let z = self.c(0.0);
         let nonneg = self.fcmp(FloatCC::GreaterThanOrEqual, a.lo, z);
         let nonpos = self.fcmp(FloatCC::LessThanOrEqual, a.hi, z);
@@ -379,16 +387,14 @@ impl Emitter<'_, '_> {
         let straddle_hi = self.max_nan(nlo, a.hi);
         let lo2 = self.select(nonpos, nhi, z);
         let hi2 = self.select(nonpos, nlo, straddle_hi);
-        let r = Iv {
+        Iv {
             lo: self.select(nonneg, a.lo, lo2),
             hi: self.select(nonneg, a.hi, hi2),
-        };
-        let e = self.is_empty(a);
-        self.empty_if(e, r)
+        }
     }
 
     pub fn iv_square(&mut self, a: Iv) -> Iv {
-        let m = self.iv_abs(a);
+        let m = self.iv_abs_nonempty(a);
         let l = self.mul(m.lo, m.lo);
         let l = self.next_down(l);
         let h = self.mul(m.hi, m.hi);
@@ -497,7 +503,7 @@ impl Emitter<'_, '_> {
         }
         let m = n.unsigned_abs();
         let p = if m.is_multiple_of(2) {
-            let s = self.iv_abs(a);
+            let s = self.iv_abs_nonempty(a);
             Iv {
                 lo: self.pow_unrolled(s.lo, m, Round::DownNonNeg),
                 hi: self.pow_unrolled(s.hi, m, Round::Up),
