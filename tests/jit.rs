@@ -1039,3 +1039,104 @@ fn prospero_speed() {
         println!("compile {name}: {t:?}");
     }
 }
+
+/// Interval evaluation time per box, the best of 15 rounds (robust against a
+/// busy machine), JIT and interpreter, on the example scenes and prospero.
+/// Run in release with `--ignored interval_speed --nocapture`.
+#[test]
+#[ignore]
+fn interval_speed() {
+    let mut fs = Vec::new();
+    for file in ["examples/orthocircle.ib", "examples/tangle_cube.ib"] {
+        let scene = ibeam::lang::load_scene(std::path::Path::new(file)).unwrap();
+        fs.push((
+            file,
+            ibeam::ir::passes::simplify(&scene.objects[0].function),
+        ));
+    }
+    if let Ok(text) = std::fs::read_to_string("../shared/models/prospero.vm") {
+        fs.push(("prospero", load_vm(&text).unwrap()));
+    }
+    for (name, f) in fs {
+        let jit = JitEvaluator::new(&f).unwrap();
+        let interp = Interpreter::new(f.clone());
+        let n = if f.len() > 1000 { 500 } else { 20_000 };
+        let mut r = Rng::new(3);
+        let bxs: Vec<[Interval; 3]> = (0..n)
+            .map(|_| {
+                [0, 1, 2].map(|_| {
+                    let c = r.range(-1.25, 1.25);
+                    Interval::new(c, c + 2.5 / 64.0)
+                })
+            })
+            .collect();
+        let best = |e: &dyn Evaluator| {
+            (0..15)
+                .map(|_| {
+                    let t = std::time::Instant::now();
+                    for b in &bxs {
+                        std::hint::black_box(e.interval(std::hint::black_box(*b)));
+                    }
+                    t.elapsed().as_nanos() as f64 / n as f64
+                })
+                .fold(f64::INFINITY, f64::min)
+        };
+        let (tj, ti) = (best(&jit), best(&interp));
+        println!(
+            "{name}: jit {tj:.1} ns/box, interp {ti:.1} ns/box, {:.2}x",
+            ti / tj
+        );
+    }
+}
+
+/// The sum of `n` random functions: big enough (≥ 500 live ops) that the
+/// JIT switches to integer selects, with every op kind inside.
+fn sum_of_random_functions(n: u64) -> Function {
+    let mut b = Builder::new();
+    let mut total: Option<ValueId> = None;
+    for seed in 0..n {
+        let f = random_function(1000 + seed, 8);
+        let mut ids: Vec<ValueId> = Vec::with_capacity(f.ops.len());
+        for op in &f.ops {
+            let m = |v: ValueId| ids[v.index()];
+            let id = match *op {
+                Op::Var(v) => b.var(v),
+                Op::Const(c) => b.constant(c),
+                Op::Unary(u, a) => b.unary(u, m(a)),
+                Op::Binary(o, x, y) => b.binary(o, m(x), m(y)),
+                Op::Powi(a, k) => b.powi(m(a), k),
+            };
+            ids.push(id);
+        }
+        let r = ids[f.root.index()];
+        total = Some(match total {
+            None => r,
+            Some(t) => b.binary(BinaryOp::Add, t, r),
+        });
+    }
+    b.finish(total.expect("n > 0"))
+}
+
+/// A large function (integer selects) agrees with the interpreter bit for
+/// bit on random and edge boxes and points.
+#[test]
+fn large_functions_use_integer_selects_and_match() {
+    let f = sum_of_random_functions(60);
+    assert!(f.len() >= 600, "{} ops", f.len());
+    let jit = JitEvaluator::new(&f).unwrap();
+    let interp = Interpreter::new(f.clone());
+    let mut r = Rng::new(31);
+    let ivs = edge_intervals();
+    for i in 0..300 {
+        let bx = if i < 100 {
+            [0, 1, 2].map(|_| ivs[r.below(ivs.len())])
+        } else {
+            random_box(&mut r)
+        };
+        let (got, want) = (jit.interval(bx), Evaluator::interval(&interp, bx));
+        assert!(same_iv(got, want), "{bx:?}: {got:?} vs {want:?}");
+        let p = random_point(&mut r);
+        let (got, want) = (jit.point(p), Evaluator::point(&interp, p));
+        assert!(same(got, want), "{p:?}: {got:e} vs {want:e}");
+    }
+}

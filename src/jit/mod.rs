@@ -137,7 +137,8 @@ fn isa() -> Result<OwnedTargetIsa, JitError> {
         let set = |fb: &mut settings::Builder, k: &str, v: &str| {
             fb.set(k, v).map_err(|e| JitError::new(k, e))
         };
-        set(&mut flags, "opt_level", "none")?;
+        let lvl = std::env::var("IBEAM_JIT_OPT").unwrap_or_else(|_| "none".into());
+        set(&mut flags, "opt_level", &lvl)?;
         set(&mut flags, "use_colocated_libcalls", "false")?;
         set(&mut flags, "is_pic", "false")?;
         let verify = if cfg!(debug_assertions) {
@@ -220,6 +221,7 @@ fn build(
     b.switch_to_block(entry);
     b.seal_block(entry);
     let params = b.block_params(entry).to_vec();
+    let int_select = emit::use_int_select(live);
     let load_box = |e: &mut Emitter, p: ir::Value| {
         [0, 1, 2].map(|k| Iv {
             lo: e.load(p, 16 * k),
@@ -228,12 +230,20 @@ fn build(
     };
     match kind {
         Kind::Point => {
-            let mut e = Emitter { b: &mut b, shims };
+            let mut e = Emitter {
+                b: &mut b,
+                shims,
+                int_select,
+            };
             let v = lower::point(&mut e, f, live, [params[0], params[1], params[2]]);
             b.ins().return_(&[v]);
         }
         Kind::PointGrad => {
-            let mut e = Emitter { b: &mut b, shims };
+            let mut e = Emitter {
+                b: &mut b,
+                shims,
+                int_select,
+            };
             let (v, d) = lower::grad(&mut e, f, live, [params[0], params[1], params[2]]);
             let out = params[3];
             e.store(v, out, 0);
@@ -244,7 +254,11 @@ fn build(
             b.ins().return_(&[]);
         }
         Kind::Interval => {
-            let mut e = Emitter { b: &mut b, shims };
+            let mut e = Emitter {
+                b: &mut b,
+                shims,
+                int_select,
+            };
             let bx = load_box(&mut e, params[0]);
             let v = lower::interval(&mut e, f, live, bx);
             e.store(v.lo, params[1], 0);
@@ -252,7 +266,11 @@ fn build(
             b.ins().return_(&[]);
         }
         Kind::IntervalGrad => {
-            let mut e = Emitter { b: &mut b, shims };
+            let mut e = Emitter {
+                b: &mut b,
+                shims,
+                int_select,
+            };
             let bx = load_box(&mut e, params[0]);
             let (v, d) = lower::grad(&mut e, f, live, bx);
             let out = params[1];
@@ -288,11 +306,19 @@ fn build(
                 let off = b.ins().ishl_imm_u(i_param, 3);
                 let addr = |b: &mut FunctionBuilder, base: ir::Value| b.ins().iadd(base, off);
                 let ptrs = [0, 1, 2, 3].map(|k| addr(&mut b, params[k]));
-                let mut e = Emitter { b: &mut b, shims };
+                let mut e = Emitter {
+                    b: &mut b,
+                    shims,
+                    int_select,
+                };
                 let xyz = [0, 1, 2].map(|k| e.load(ptrs[k], 0));
                 let call = b.ins().call(callee, &xyz);
                 let v = b.inst_results(call)[0];
-                let mut e = Emitter { b: &mut b, shims };
+                let mut e = Emitter {
+                    b: &mut b,
+                    shims,
+                    int_select,
+                };
                 e.store(v, ptrs[3], 0);
             } else {
                 let in_off = b.ins().imul_imm_u(i_param, 48);
@@ -613,7 +639,12 @@ mod tests {
         b.switch_to_block(entry);
         b.seal_block(entry);
         let x = b.block_params(entry)[0];
-        let mut e = Emitter { b: &mut b, shims };
+        let int_select = false;
+        let mut e = Emitter {
+            b: &mut b,
+            shims,
+            int_select,
+        };
         let v = emit(&mut e, x);
         b.ins().return_(&[v]);
         b.finalize(fe);
