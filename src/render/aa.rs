@@ -1,0 +1,702 @@
+//! Anti-aliasing: interval adaptive anti-aliasing (IAA, after Flórez et
+//! al.) and regular grid supersampling, the baseline.
+//!
+//! # IAA
+//! After the base render (one ray through each pixel centre), each tile is
+//! revisited as beams over the *whole area* of its pixels, starting with
+//! the tile and quartering down to single pixels and then to sub-pixel
+//! cells. A cell's beam gets the front-to-back rejection sweep of
+//! [`super::beam`] over its clipped hull and, where a surface remains, the
+//! inclusion test; the outcome is one of:
+//! - *background*: every ray of the cell misses: no sample and no ray,
+//!   the cell is background exactly;
+//! - *smooth*: every ray of the cell hits one object (the only one that
+//!   may vanish on the included beam piece) in a proven bracket, and the
+//!   interval of the lit colour over that piece — Lambert and Blinn-Phong
+//!   terms bounded with interval arithmetic over the interval of the unit
+//!   normal (from `interval_grad`), the view directions and the light
+//!   directions — is narrower than the threshold in every channel: one
+//!   sample at the cell centre suffices (for a whole pixel: its base ray);
+//! - *split*: anything else, in particular silhouettes and thin features,
+//!   which the tests cannot settle. Below a pixel, cells are split 2×2 down
+//!   to `depth` levels (at most `4^depth` samples) and the leaves' linear
+//!   colours are averaged with their area as weight.
+//!
+//! Shadows are not part of the colour interval (proving a shadow edge
+//! absent over a beam needs a shadow beam from a surface patch, which the
+//! surface itself obstructs); a smooth cell takes its shadow state from its
+//! one sample. The pixel's centre ray is never discarded when it is the
+//! only evidence of surface: if every leaf of a split pixel misses but the
+//! centre ray hit, the centre sample joins the average with a leaf's
+//! weight, so an AA render never loses a pixel the plain render drew.
+//!
+//! # Grid
+//! `grid:N` traces the image at N× the resolution with the chosen method
+//! (beams then span sub-samples) and averages each N×N block in linear
+//! light.
+
+use std::fmt;
+
+use super::camera::{CornerRays, IBox, PixelRay, bounds_box, box_hull, normalize, scale};
+use super::ray::{march, trace_ray};
+use super::shade::{self, AMBIENT, SHININESS, SPECULAR};
+use super::{Method, Tracer};
+use crate::interval::Interval;
+use crate::render::stats::RenderStats;
+use crate::scene::LightKind;
+
+/// Default IAA threshold: 1/64 of the linear colour range per channel.
+pub const DEFAULT_THRESHOLD: f64 = 1.0 / 64.0;
+/// Default IAA depth: 2 levels below the pixel, up to 16 samples.
+pub const DEFAULT_DEPTH: u32 = 2;
+/// Largest IAA depth (4^6 = 4096 samples per pixel).
+pub const MAX_DEPTH: u32 = 6;
+/// Largest grid factor.
+pub const MAX_GRID: u32 = 32;
+
+// Rejection pieces per cell sweep before the cell is declared split.
+const MAX_SWEEP_PIECES: usize = 256;
+
+/// An anti-aliasing mode.
+#[derive(Copy, Clone, Debug, PartialEq, Default)]
+pub enum Aa {
+    /// One ray per pixel centre.
+    #[default]
+    None,
+    /// Regular N×N supersampling.
+    Grid(u32),
+    /// Interval adaptive anti-aliasing.
+    Iaa {
+        /// Largest accepted width of a cell's colour interval (linear).
+        threshold: f64,
+        /// Levels of 2×2 splitting below a pixel.
+        depth: u32,
+    },
+}
+
+impl Aa {
+    /// Parses `none`, `iaa` (default threshold and depth) or `grid:N`.
+    pub fn parse(s: &str) -> Result<Aa, String> {
+        match s.trim() {
+            "none" => Ok(Aa::None),
+            "iaa" => Ok(Aa::Iaa {
+                threshold: DEFAULT_THRESHOLD,
+                depth: DEFAULT_DEPTH,
+            }),
+            t => {
+                let n = t
+                    .strip_prefix("grid:")
+                    .ok_or_else(|| format!("anti-aliasing `{s}` is not none, iaa or grid:N"))?;
+                let n: u32 = n
+                    .parse()
+                    .map_err(|_| format!("anti-aliasing `{s}`: `{n}` is not a whole number"))?;
+                let aa = Aa::Grid(n);
+                aa.validate()?;
+                Ok(aa)
+            }
+        }
+    }
+
+    /// Checks the parameters' ranges.
+    pub fn validate(&self) -> Result<(), String> {
+        match *self {
+            Aa::None => Ok(()),
+            Aa::Grid(n) if (1..=MAX_GRID).contains(&n) => Ok(()),
+            Aa::Grid(n) => Err(format!("grid:{n}: N must be in 1..={MAX_GRID}")),
+            Aa::Iaa { threshold, depth } => {
+                if !(threshold >= 0.0 && threshold.is_finite()) {
+                    Err(format!("IAA threshold {threshold} must be finite and ≥ 0"))
+                } else if depth > MAX_DEPTH {
+                    Err(format!("IAA depth {depth} must be in 0..={MAX_DEPTH}"))
+                } else {
+                    Ok(())
+                }
+            }
+        }
+    }
+
+    /// The supersampling factor of the traced grid (1 unless `Grid`).
+    pub fn grid_factor(&self) -> u32 {
+        match *self {
+            Aa::Grid(n) => n,
+            _ => 1,
+        }
+    }
+}
+
+impl fmt::Display for Aa {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Aa::None => write!(f, "none"),
+            Aa::Grid(n) => write!(f, "grid:{n}"),
+            Aa::Iaa { threshold, depth } => write!(f, "iaa(t={threshold}, d={depth})"),
+        }
+    }
+}
+
+/// The IAA results of one tile, row-major within the tile.
+pub(crate) struct TilePixels<'a> {
+    /// Left column of the tile (pixels).
+    pub x0: u32,
+    /// Top row of the tile (pixels).
+    pub y0: u32,
+    /// Tile width.
+    pub w: u32,
+    /// Tile height.
+    pub h: u32,
+    /// Linear colour of the base render, replaced by the AA average.
+    pub linear: &'a mut [[f64; 3]],
+    /// Ray parameter of the base hit (+inf: none), min over samples after.
+    pub depth: &'a mut [f64],
+    /// Fraction of the pixel's samples (by area) that hit.
+    pub coverage: &'a mut [f64],
+    /// Samples per pixel.
+    pub samples: &'a mut [u32],
+}
+
+/// What a cell's beam tests decided.
+#[derive(Copy, Clone, Debug, PartialEq)]
+enum Cell {
+    Background,
+    Smooth,
+    Split,
+}
+
+/// A cell's test outcome and the rejected prefix its children inherit.
+struct Decision {
+    cell: Cell,
+    t_floor: f64,
+}
+
+/// IAA over one tile whose base render is in `px`.
+pub(crate) fn refine_tile(
+    tr: &Tracer<'_>,
+    method: Method,
+    px: &mut TilePixels<'_>,
+    background: [f64; 3],
+    threshold: f64,
+    depth: u32,
+    st: &mut RenderStats,
+) {
+    let n = (px.w * px.h) as usize;
+    let mut samples = vec![1u64; n];
+    let ctx = Ctx {
+        tr,
+        method,
+        background,
+        threshold,
+        depth,
+    };
+    ctx.block(px, &mut samples, (0, 0, px.w, px.h), 0.0, st);
+    for (k, &s) in samples.iter().enumerate() {
+        px.samples[k] = u32::try_from(s).unwrap_or(u32::MAX);
+        st.aa_samples += s;
+        st.aa_samples_max = st.aa_samples_max.max(s);
+        st.aa_pixels_split += u64::from(s > 1);
+        if s == 1 {
+            px.coverage[k] = if px.depth[k].is_finite() { 1.0 } else { 0.0 };
+        }
+    }
+}
+
+struct Ctx<'t, 'a> {
+    tr: &'t Tracer<'a>,
+    method: Method,
+    background: [f64; 3],
+    threshold: f64,
+    depth: u32,
+}
+
+/// Sum of area-weighted leaf colours, hit weight and sample count.
+#[derive(Default)]
+struct Acc {
+    color: [f64; 3],
+    hit: f64,
+    samples: u64,
+    min_t: f64,
+}
+
+impl Ctx<'_, '_> {
+    // A block of whole pixels (tile coordinates, half-open).
+    fn block(
+        &self,
+        px: &mut TilePixels<'_>,
+        samples: &mut [u64],
+        (bx0, by0, bx1, by1): (u32, u32, u32, u32),
+        t_floor: f64,
+        st: &mut RenderStats,
+    ) {
+        let xs = (f64::from(px.x0 + bx0), f64::from(px.x0 + bx1));
+        let ys = (f64::from(px.y0 + by0), f64::from(px.y0 + by1));
+        let d = self.test(xs, ys, t_floor, st);
+        let single = bx1 - bx0 == 1 && by1 - by0 == 1;
+        // A whole block's verdict stands only where every base ray agrees
+        // with it (a rounding disagreement between the beam and a ray is
+        // settled by looking closer).
+        let agrees = |px: &TilePixels<'_>, want_hit: bool| {
+            (by0..by1).all(|j| {
+                (bx0..bx1).all(|i| px.depth[(j * px.w + i) as usize].is_finite() == want_hit)
+            })
+        };
+        match d.cell {
+            Cell::Background if agrees(px, false) => {
+                for j in by0..by1 {
+                    for i in bx0..bx1 {
+                        px.linear[(j * px.w + i) as usize] = self.background;
+                    }
+                }
+                return;
+            }
+            Cell::Smooth if agrees(px, true) => return,
+            _ => {}
+        }
+        if single {
+            self.split_pixel(px, samples, bx0, by0, d.t_floor, st);
+            return;
+        }
+        let mx = (bx0 + bx1).div_ceil(2);
+        let my = (by0 + by1).div_ceil(2);
+        for (y0, y1) in [(by0, my), (my, by1)] {
+            for (x0, x1) in [(bx0, mx), (mx, bx1)] {
+                if x0 < x1 && y0 < y1 {
+                    self.block(px, samples, (x0, y0, x1, y1), d.t_floor, st);
+                }
+            }
+        }
+    }
+
+    // A pixel that needs more than its centre ray.
+    fn split_pixel(
+        &self,
+        px: &mut TilePixels<'_>,
+        samples: &mut [u64],
+        i: u32,
+        j: u32,
+        t_floor: f64,
+        st: &mut RenderStats,
+    ) {
+        let k = (j * px.w + i) as usize;
+        if self.depth == 0 {
+            return;
+        }
+        let (x, y) = (f64::from(px.x0 + i), f64::from(px.y0 + j));
+        let mut acc = Acc {
+            min_t: f64::INFINITY,
+            ..Acc::default()
+        };
+        for (cx, cy) in quarters((x, x + 1.0), (y, y + 1.0)) {
+            self.cell(cx, cy, 1, 0.25, t_floor, &mut acc, st);
+        }
+        let centre_hit = px.depth[k].is_finite();
+        if acc.hit == 0.0 && centre_hit {
+            // Keep the proof of surface the centre ray gave.
+            let wl = 0.25f64.powi(self.depth as i32);
+            let c = px.linear[k];
+            for (a, ch) in acc.color.iter_mut().zip(c) {
+                *a += wl * ch;
+            }
+            acc.hit += wl;
+            acc.samples += 1;
+            let tot = 1.0 + wl;
+            acc.color = acc.color.map(|v| v / tot);
+            acc.hit /= tot;
+            acc.min_t = acc.min_t.min(px.depth[k]);
+        }
+        px.linear[k] = acc.color;
+        px.coverage[k] = acc.hit;
+        px.depth[k] = acc.min_t.min(px.depth[k]);
+        samples[k] = acc.samples;
+    }
+
+    // A sub-pixel cell at `level` (1 = quarter pixel) with area `wgt`.
+    #[allow(clippy::too_many_arguments)]
+    fn cell(
+        &self,
+        xs: (f64, f64),
+        ys: (f64, f64),
+        level: u32,
+        wgt: f64,
+        t_floor: f64,
+        acc: &mut Acc,
+        st: &mut RenderStats,
+    ) {
+        if level < self.depth {
+            let d = self.test(xs, ys, t_floor, st);
+            match d.cell {
+                Cell::Background => {
+                    for (a, b) in acc.color.iter_mut().zip(self.background) {
+                        *a += wgt * b;
+                    }
+                    acc.samples += 1;
+                    return;
+                }
+                Cell::Smooth => {}
+                Cell::Split => {
+                    for (cx, cy) in quarters(xs, ys) {
+                        self.cell(cx, cy, level + 1, 0.25 * wgt, d.t_floor, acc, st);
+                    }
+                    return;
+                }
+            }
+        }
+        let (c, t) = self.sample(0.5 * (xs.0 + xs.1), 0.5 * (ys.0 + ys.1), st);
+        for (a, b) in acc.color.iter_mut().zip(c) {
+            *a += wgt * b;
+        }
+        if t.is_finite() {
+            acc.hit += wgt;
+            acc.min_t = acc.min_t.min(t);
+        }
+        acc.samples += 1;
+    }
+
+    // One ray at screen position (x, y), shaded with per-sample shadows:
+    // linear colour and hit parameter (+inf for none).
+    fn sample(&self, x: f64, y: f64, st: &mut RenderStats) -> ([f64; 3], f64) {
+        let tr = self.tr;
+        let (o, d) = tr.cam.ray_at(x, y);
+        let ray = PixelRay {
+            o,
+            d,
+            om: o.map(|c| c.mid()),
+            dm: d.map(|c| c.mid()),
+        };
+        let Some((a, b)) = ray.slab(&tr.bounds) else {
+            return (self.background, f64::INFINITY);
+        };
+        let all: Vec<u32> = (0..tr.evals.len() as u32).collect();
+        let hit = match self.method {
+            Method::Point { steps } => march(tr, &ray, a, b, &all, steps, st),
+            Method::Beam | Method::Pixel => trace_ray(tr, &ray, a, b, &all, st),
+        };
+        match hit {
+            Some(h) => {
+                let s = shade::surface(tr, &ray, &h, st);
+                let no_beam = vec![false; tr.lights.len()];
+                (shade::shade(tr, &s, &no_beam, st), h.t)
+            }
+            None => (self.background, f64::INFINITY),
+        }
+    }
+
+    // The beam tests of the screen rectangle xs × ys (whole area).
+    fn test(&self, xs: (f64, f64), ys: (f64, f64), t_floor: f64, st: &mut RenderStats) -> Decision {
+        let tr = self.tr;
+        let split = |t_floor| Decision {
+            cell: Cell::Split,
+            t_floor,
+        };
+        let corners = tr.cam.corners(xs, ys);
+        let bounds = bounds_box(&tr.bounds);
+        let t1 = far_t(&corners, &bounds);
+        let t0 = t_floor.max(0.0);
+        if !(t0 <= t1) {
+            return Decision {
+                cell: Cell::Background,
+                t_floor,
+            };
+        }
+        let side = (xs.1 - xs.0).max(ys.1 - ys.0);
+        let min_w = |t: f64| side * tr.cam.spacing(t).max(1e-9);
+        let n = tr.evals.len();
+        // F over the part of the beam piece inside the bounds; None when
+        // the piece lies wholly outside them.
+        let eval_min = |t: Interval, st: &mut RenderStats| -> Option<Interval> {
+            let hb = super::camera::box_meet(corners.hull(t), bounds)?;
+            let mut f = Interval::point(f64::INFINITY);
+            for k in 0..n {
+                let v = tr.interval_tight(k, hb, 0, st);
+                if !v.is_empty() {
+                    f = f.min(v);
+                }
+            }
+            Some(f)
+        };
+        if tr.flat {
+            // Constant along the rays: no bracket to include.
+            let rejected = eval_min(Interval::new(t0, t1), st).is_none_or(|f| f.lo > 0.0);
+            return Decision {
+                cell: if rejected {
+                    Cell::Background
+                } else {
+                    Cell::Split
+                },
+                t_floor,
+            };
+        }
+        let mut stack = vec![(t0, t1)];
+        let mut pieces = 0usize;
+        let mut found = None;
+        while let Some((a, c)) = stack.pop() {
+            pieces += 1;
+            let Some(f) = eval_min(Interval::new(a, c), st) else {
+                continue;
+            };
+            if f.lo > 0.0 {
+                continue;
+            }
+            if c - a <= min_w(a) || pieces >= MAX_SWEEP_PIECES {
+                found = Some((a, c));
+                break;
+            }
+            let m = 0.5 * (a + c);
+            stack.push((m, c));
+            stack.push((a, m));
+        }
+        let Some((ta, tb)) = found else {
+            return Decision {
+                cell: Cell::Background,
+                t_floor,
+            };
+        };
+        // Inclusion: the unclipped cross-sections at ta (positive) and at
+        // tb2 (negative), the piece between inside the bounds (so no ray
+        // leaves them before its root), one object that may vanish there,
+        // strictly decreasing along every ray.
+        let whole = |t: Interval, st: &mut RenderStats| -> Interval {
+            let hb = corners.hull(t);
+            let mut f = Interval::point(f64::INFINITY);
+            for k in 0..n {
+                let v = tr.interval(k, hb, st);
+                if !v.is_empty() {
+                    f = f.min(v);
+                }
+            }
+            f
+        };
+        if whole(Interval::point(ta), st).lo <= 0.0 {
+            return split(ta);
+        }
+        let w = (tb - ta).max(min_w(ta));
+        for mult in [1.0, 2.0, 4.0] {
+            let tb2 = (ta + mult * w).min(t1);
+            if whole(Interval::point(tb2), st).hi < 0.0 {
+                let piece = Interval::new(ta, tb2);
+                let smooth = self.smooth_on(&corners, &bounds, piece, st);
+                return Decision {
+                    cell: if smooth { Cell::Smooth } else { Cell::Split },
+                    t_floor: ta,
+                };
+            }
+            if tb2 >= t1 {
+                break;
+            }
+        }
+        split(ta)
+    }
+
+    // Whether one object alone may vanish on the beam piece, it decreases
+    // strictly along every ray there, and the lit colour's interval over
+    // the piece is narrower than the threshold.
+    fn smooth_on(
+        &self,
+        corners: &CornerRays,
+        bounds: &IBox,
+        piece: Interval,
+        st: &mut RenderStats,
+    ) -> bool {
+        let tr = self.tr;
+        let hb = corners.hull(piece);
+        if (0..3).any(|i| hb[i].lo < bounds[i].lo || hb[i].hi > bounds[i].hi) {
+            return false;
+        }
+        let mut only = None;
+        for k in 0..tr.evals.len() {
+            let f = tr.interval(k, hb, st);
+            if f.is_empty() || f.lo > 0.0 {
+                continue;
+            }
+            if only.is_some() {
+                return false;
+            }
+            only = Some(k);
+        }
+        let Some(k) = only else {
+            return false;
+        };
+        let c = &corners.0;
+        let dirs = box_hull(box_hull(c[0].1, c[1].1), box_hull(c[2].1, c[3].1));
+        let g = tr.interval_grad(k, hb, st);
+        if !g.d.iter().all(|d| d.lo.is_finite() && d.hi.is_finite()) {
+            return false;
+        }
+        let dfdt = dot_iv(&g.d, &dirs);
+        if dfdt.is_empty() || dfdt.hi >= 0.0 {
+            return false;
+        }
+        let Some(nout) = normalize_iv(&g.d) else {
+            return false;
+        };
+        let Some(v) = normalize_iv(&dirs.map(|d| d.neg())) else {
+            return false;
+        };
+        let facing = dot_iv(&nout, &v);
+        let n = if facing.lo > 0.0 {
+            nout
+        } else if facing.hi < 0.0 {
+            nout.map(|c| c.neg())
+        } else {
+            return false;
+        };
+        let Some(col) = colour_interval(tr, tr.colors[k], &n, &v, &hb) else {
+            return false;
+        };
+        col.iter()
+            .all(|c| c.hi.clamp(0.0, 1.0) - c.lo.clamp(0.0, 1.0) <= self.threshold)
+    }
+}
+
+/// Encloses the colour `shade::shade` gives (shadows aside) for every
+/// unit normal in `n`, view vector in `v` and point in `p`.
+fn colour_interval(
+    tr: &Tracer<'_>,
+    color: [f64; 3],
+    n: &IBox,
+    v: &IBox,
+    p: &IBox,
+) -> Option<[Interval; 3]> {
+    let mut c: [Interval; 3] =
+        std::array::from_fn(|i| Interval::point(color[i]).mul(Interval::point(AMBIENT)));
+    for light in tr.lights {
+        let l: IBox = match light.kind {
+            LightKind::Directional(dir) => normalize(scale(dir, -1.0))?.map(Interval::point),
+            LightKind::Point(lp) => {
+                normalize_iv(&std::array::from_fn(|i| Interval::point(lp[i]).sub(p[i])))?
+            }
+        };
+        let ndl = dot_iv(n, &l);
+        if ndl.is_empty() {
+            return None;
+        }
+        if ndl.hi <= 0.0 {
+            continue;
+        }
+        let h = normalize_iv(&std::array::from_fn(|i| l[i].add(v[i])))?;
+        let ndh = dot_iv(n, &h);
+        let ndh = Interval::new(ndh.lo.max(0.0), ndh.hi.max(0.0));
+        let spec = Interval::point(SPECULAR).mul(ndh.powi(SHININESS));
+        let lam = Interval::new(ndl.lo.max(0.0), ndl.hi);
+        for (ch, out) in c.iter_mut().enumerate() {
+            let mut add = Interval::point(light.color[ch])
+                .mul(Interval::point(color[ch]).mul(lam).add(spec));
+            if ndl.lo <= 0.0 {
+                // The light may be behind the surface for some normals.
+                add = Interval::new(add.lo.min(0.0), add.hi.max(0.0));
+            }
+            *out = out.add(add);
+        }
+    }
+    c.iter()
+        .all(|i| !i.is_empty() && i.lo.is_finite() && i.hi.is_finite())
+        .then_some(c)
+}
+
+fn dot_iv(a: &IBox, b: &IBox) -> Interval {
+    (0..3).fold(Interval::point(0.0), |acc, i| acc.add(a[i].mul(b[i])))
+}
+
+/// Encloses `g / |g|` for every g in the box, component by component:
+/// `g_i / sqrt(g_i² + r)` (r the other components' squared length) is
+/// increasing in g_i and, for fixed sign of g_i, monotone in r, so each
+/// bound sits at an end of g_i and an end of r. None when the box may hold
+/// the zero vector.
+fn normalize_iv(g: &IBox) -> Option<IBox> {
+    if g.iter().all(|c| c.contains(0.0)) || g.iter().any(|c| c.is_empty()) {
+        return None;
+    }
+    let mut out = [Interval::point(0.0); 3];
+    for i in 0..3 {
+        let r = (0..3)
+            .filter(|&j| j != i)
+            .fold(Interval::point(0.0), |acc, j| acc.add(g[j].square()));
+        let at = |a: f64, r: f64| -> Interval {
+            if a == 0.0 {
+                return Interval::point(0.0);
+            }
+            let ai = Interval::point(a);
+            ai.div(ai.square().add(Interval::point(r)).sqrt())
+        };
+        let lo = at(g[i].lo, if g[i].lo >= 0.0 { r.hi } else { r.lo }).lo;
+        let hi = at(g[i].hi, if g[i].hi >= 0.0 { r.lo } else { r.hi }).hi;
+        if !(lo <= hi) {
+            return None;
+        }
+        out[i] = Interval::new(lo.max(-1.0), hi.min(1.0));
+    }
+    Some(out)
+}
+
+// The four quarters of a screen rectangle, row by row.
+fn quarters(xs: (f64, f64), ys: (f64, f64)) -> [((f64, f64), (f64, f64)); 4] {
+    let mx = 0.5 * (xs.0 + xs.1);
+    let my = 0.5 * (ys.0 + ys.1);
+    [
+        ((xs.0, mx), (ys.0, my)),
+        ((mx, xs.1), (ys.0, my)),
+        ((xs.0, mx), (my, ys.1)),
+        ((mx, xs.1), (my, ys.1)),
+    ]
+}
+
+// A ray parameter beyond which every ray of the cell is outside the
+// bounds: |d| ≥ 1 for both projections, so a point at parameter t is at
+// least t from its origin, and the distance from an origin in the cell
+// (convex in the origin) to the bounds is largest at a corner pair.
+fn far_t(corners: &CornerRays, bounds: &IBox) -> f64 {
+    let mut far = 0.0f64;
+    for (o, _) in &corners.0 {
+        for cx in [bounds[0].lo, bounds[0].hi] {
+            for cy in [bounds[1].lo, bounds[1].hi] {
+                for cz in [bounds[2].lo, bounds[2].hi] {
+                    let d2 = [cx, cy, cz]
+                        .iter()
+                        .zip(o)
+                        .map(|(c, oi)| {
+                            let e = (c - oi.lo).abs().max((c - oi.hi).abs());
+                            e * e
+                        })
+                        .sum::<f64>();
+                    far = far.max(d2.sqrt());
+                }
+            }
+        }
+    }
+    far * (1.0 + 1e-9) + 1e-9
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn modes_parse() {
+        assert_eq!(Aa::parse("none"), Ok(Aa::None));
+        assert_eq!(Aa::parse("grid:4"), Ok(Aa::Grid(4)));
+        assert!(matches!(Aa::parse("iaa"), Ok(Aa::Iaa { depth: 2, .. })));
+        assert!(Aa::parse("grid:0").is_err());
+        assert!(Aa::parse("grid:x").is_err());
+        assert!(Aa::parse("ssaa").is_err());
+    }
+
+    #[test]
+    fn normalized_box_holds_every_unit_vector() {
+        let g = [
+            Interval::new(0.5, 2.0),
+            Interval::new(-1.0, 0.25),
+            Interval::new(3.0, 3.5),
+        ];
+        let n = normalize_iv(&g).unwrap();
+        for a in [0.5, 1.0, 2.0] {
+            for b in [-1.0, 0.0, 0.25] {
+                for c in [3.0, 3.5] {
+                    let l = (a * a + b * b + c * c as f64).sqrt();
+                    for (i, v) in [a / l, b / l, c / l].iter().enumerate() {
+                        assert!(n[i].contains(*v), "{i} {v} {:?}", n[i]);
+                    }
+                }
+            }
+        }
+        let z = [Interval::new(-1.0, 1.0); 3];
+        assert!(normalize_iv(&z).is_none());
+    }
+}
