@@ -37,10 +37,9 @@
 
 use std::fmt;
 
-use super::camera::{CornerRays, IBox, PixelRay, bounds_box, box_hull, normalize, scale};
-use super::ray::{march, trace_ray};
-use super::shade::{self, AMBIENT, SHININESS, SPECULAR};
-use super::{Method, Tracer};
+use super::Tracer;
+use super::camera::{CornerRays, IBox, bounds_box, box_hull, normalize, scale};
+use super::shade::{AMBIENT, SHININESS, SPECULAR};
 use crate::interval::Interval;
 use crate::render::stats::RenderStats;
 use crate::scene::LightKind;
@@ -168,52 +167,73 @@ struct Decision {
     t_floor: f64,
 }
 
-/// IAA over one tile whose base render is in `px`.
-pub(crate) fn refine_tile(
+/// The pixel-area tests of IAA over one tile whose base render is in
+/// `px`: background and smooth pixels are settled in place (background
+/// colour, or the base sample); returns which pixels need sub-samples.
+pub(crate) fn classify_tile(
     tr: &Tracer<'_>,
-    method: Method,
     px: &mut TilePixels<'_>,
     background: [f64; 3],
     threshold: f64,
-    depth: u32,
     st: &mut RenderStats,
-) {
+) -> Vec<bool> {
     let n = (px.w * px.h) as usize;
-    let mut samples = vec![1u64; n];
+    let mut split = vec![false; n];
     let ctx = Ctx {
         tr,
-        method,
         background,
         threshold,
-        depth,
     };
-    ctx.block(px, &mut samples, (0, 0, px.w, px.h), 0.0, st);
-    for (k, &s) in samples.iter().enumerate() {
-        px.samples[k] = u32::try_from(s).unwrap_or(u32::MAX);
+    ctx.block(px, &mut split, (0, 0, px.w, px.h), 0.0, st);
+    split
+}
+
+/// Folds the sub-samples of the split pixels (`fine`: per pixel the mean
+/// linear colour, covered fraction and nearest hit of its `per` samples)
+/// into the tile, and counts the samples.
+pub(crate) fn merge_split(
+    px: &mut TilePixels<'_>,
+    split: &[bool],
+    fine: Option<(&[[f64; 3]], &[f64], &[f64])>,
+    per: u32,
+    st: &mut RenderStats,
+) {
+    for k in 0..split.len() {
+        let centre_hit = px.depth[k].is_finite();
+        match fine {
+            Some((lin, cov, dep)) if split[k] => {
+                let (mut c, mut h) = (lin[k], cov[k]);
+                let mut s = per;
+                if h == 0.0 && centre_hit {
+                    // Keep the proof of surface the centre ray gave: it
+                    // joins the average with the weight of one sample.
+                    let wl = 1.0 / f64::from(per);
+                    let tot = 1.0 + wl;
+                    c = std::array::from_fn(|i| (c[i] + wl * px.linear[k][i]) / tot);
+                    h = wl / tot;
+                    s += 1;
+                }
+                px.linear[k] = c;
+                px.coverage[k] = h;
+                px.depth[k] = px.depth[k].min(dep[k]);
+                px.samples[k] = s;
+            }
+            _ => {
+                px.coverage[k] = if centre_hit { 1.0 } else { 0.0 };
+                px.samples[k] = 1;
+            }
+        }
+        let s = u64::from(px.samples[k]);
         st.aa_samples += s;
         st.aa_samples_max = st.aa_samples_max.max(s);
         st.aa_pixels_split += u64::from(s > 1);
-        if s == 1 {
-            px.coverage[k] = if px.depth[k].is_finite() { 1.0 } else { 0.0 };
-        }
     }
 }
 
 struct Ctx<'t, 'a> {
     tr: &'t Tracer<'a>,
-    method: Method,
     background: [f64; 3],
     threshold: f64,
-    depth: u32,
-}
-
-/// Sum of area-weighted leaf colours, hit weight and sample count.
-#[derive(Default)]
-struct Acc {
-    color: [f64; 3],
-    hit: f64,
-    samples: u64,
-    min_t: f64,
 }
 
 impl Ctx<'_, '_> {
@@ -221,7 +241,7 @@ impl Ctx<'_, '_> {
     fn block(
         &self,
         px: &mut TilePixels<'_>,
-        samples: &mut [u64],
+        split: &mut [bool],
         (bx0, by0, bx1, by1): (u32, u32, u32, u32),
         t_floor: f64,
         st: &mut RenderStats,
@@ -229,10 +249,9 @@ impl Ctx<'_, '_> {
         let xs = (f64::from(px.x0 + bx0), f64::from(px.x0 + bx1));
         let ys = (f64::from(px.y0 + by0), f64::from(px.y0 + by1));
         let d = self.test(xs, ys, t_floor, st);
-        let single = bx1 - bx0 == 1 && by1 - by0 == 1;
-        // A whole block's verdict stands only where every base ray agrees
-        // with it (a rounding disagreement between the beam and a ray is
-        // settled by looking closer).
+        // A verdict stands only where every base ray agrees with it (a
+        // rounding disagreement between a beam and a ray is settled by
+        // looking closer).
         let agrees = |px: &TilePixels<'_>, want_hit: bool| {
             (by0..by1).all(|j| {
                 (bx0..bx1).all(|i| px.depth[(j * px.w + i) as usize].is_finite() == want_hit)
@@ -250,8 +269,8 @@ impl Ctx<'_, '_> {
             Cell::Smooth if agrees(px, true) => return,
             _ => {}
         }
-        if single {
-            self.split_pixel(px, samples, bx0, by0, d.t_floor, st);
+        if bx1 - bx0 == 1 && by1 - by0 == 1 {
+            split[(by0 * px.w + bx0) as usize] = true;
             return;
         }
         let mx = (bx0 + bx1).div_ceil(2);
@@ -259,123 +278,9 @@ impl Ctx<'_, '_> {
         for (y0, y1) in [(by0, my), (my, by1)] {
             for (x0, x1) in [(bx0, mx), (mx, bx1)] {
                 if x0 < x1 && y0 < y1 {
-                    self.block(px, samples, (x0, y0, x1, y1), d.t_floor, st);
+                    self.block(px, split, (x0, y0, x1, y1), d.t_floor, st);
                 }
             }
-        }
-    }
-
-    // A pixel that needs more than its centre ray.
-    fn split_pixel(
-        &self,
-        px: &mut TilePixels<'_>,
-        samples: &mut [u64],
-        i: u32,
-        j: u32,
-        t_floor: f64,
-        st: &mut RenderStats,
-    ) {
-        let k = (j * px.w + i) as usize;
-        if self.depth == 0 {
-            return;
-        }
-        let (x, y) = (f64::from(px.x0 + i), f64::from(px.y0 + j));
-        let mut acc = Acc {
-            min_t: f64::INFINITY,
-            ..Acc::default()
-        };
-        for (cx, cy) in quarters((x, x + 1.0), (y, y + 1.0)) {
-            self.cell(cx, cy, 1, 0.25, t_floor, &mut acc, st);
-        }
-        let centre_hit = px.depth[k].is_finite();
-        if acc.hit == 0.0 && centre_hit {
-            // Keep the proof of surface the centre ray gave.
-            let wl = 0.25f64.powi(self.depth as i32);
-            let c = px.linear[k];
-            for (a, ch) in acc.color.iter_mut().zip(c) {
-                *a += wl * ch;
-            }
-            acc.hit += wl;
-            acc.samples += 1;
-            let tot = 1.0 + wl;
-            acc.color = acc.color.map(|v| v / tot);
-            acc.hit /= tot;
-            acc.min_t = acc.min_t.min(px.depth[k]);
-        }
-        px.linear[k] = acc.color;
-        px.coverage[k] = acc.hit;
-        px.depth[k] = acc.min_t.min(px.depth[k]);
-        samples[k] = acc.samples;
-    }
-
-    // A sub-pixel cell at `level` (1 = quarter pixel) with area `wgt`.
-    #[allow(clippy::too_many_arguments)]
-    fn cell(
-        &self,
-        xs: (f64, f64),
-        ys: (f64, f64),
-        level: u32,
-        wgt: f64,
-        t_floor: f64,
-        acc: &mut Acc,
-        st: &mut RenderStats,
-    ) {
-        if level < self.depth {
-            let d = self.test(xs, ys, t_floor, st);
-            match d.cell {
-                Cell::Background => {
-                    for (a, b) in acc.color.iter_mut().zip(self.background) {
-                        *a += wgt * b;
-                    }
-                    acc.samples += 1;
-                    return;
-                }
-                Cell::Smooth => {}
-                Cell::Split => {
-                    for (cx, cy) in quarters(xs, ys) {
-                        self.cell(cx, cy, level + 1, 0.25 * wgt, d.t_floor, acc, st);
-                    }
-                    return;
-                }
-            }
-        }
-        let (c, t) = self.sample(0.5 * (xs.0 + xs.1), 0.5 * (ys.0 + ys.1), st);
-        for (a, b) in acc.color.iter_mut().zip(c) {
-            *a += wgt * b;
-        }
-        if t.is_finite() {
-            acc.hit += wgt;
-            acc.min_t = acc.min_t.min(t);
-        }
-        acc.samples += 1;
-    }
-
-    // One ray at screen position (x, y), shaded with per-sample shadows:
-    // linear colour and hit parameter (+inf for none).
-    fn sample(&self, x: f64, y: f64, st: &mut RenderStats) -> ([f64; 3], f64) {
-        let tr = self.tr;
-        let (o, d) = tr.cam.ray_at(x, y);
-        let ray = PixelRay {
-            o,
-            d,
-            om: o.map(|c| c.mid()),
-            dm: d.map(|c| c.mid()),
-        };
-        let Some((a, b)) = ray.slab(&tr.bounds) else {
-            return (self.background, f64::INFINITY);
-        };
-        let all: Vec<u32> = (0..tr.evals.len() as u32).collect();
-        let hit = match self.method {
-            Method::Point { steps } => march(tr, &ray, a, b, &all, steps, st),
-            Method::Beam | Method::Pixel => trace_ray(tr, &ray, a, b, &all, st),
-        };
-        match hit {
-            Some(h) => {
-                let s = shade::surface(tr, &ray, &h, st);
-                let no_beam = vec![false; tr.lights.len()];
-                (shade::shade(tr, &s, &no_beam, st), h.t)
-            }
-            None => (self.background, f64::INFINITY),
         }
     }
 
@@ -624,18 +529,6 @@ fn normalize_iv(g: &IBox) -> Option<IBox> {
         out[i] = Interval::new(lo.max(-1.0), hi.min(1.0));
     }
     Some(out)
-}
-
-// The four quarters of a screen rectangle, row by row.
-fn quarters(xs: (f64, f64), ys: (f64, f64)) -> [((f64, f64), (f64, f64)); 4] {
-    let mx = 0.5 * (xs.0 + xs.1);
-    let my = 0.5 * (ys.0 + ys.1);
-    [
-        ((xs.0, mx), (ys.0, my)),
-        ((mx, xs.1), (ys.0, my)),
-        ((xs.0, mx), (my, ys.1)),
-        ((mx, xs.1), (my, ys.1)),
-    ]
 }
 
 // A ray parameter beyond which every ray of the cell is outside the

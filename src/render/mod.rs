@@ -353,6 +353,21 @@ pub fn render_aa(
         diag: camera::norm(camera::sub(b.max, b.min)),
         flat: constant_along_rays(&cam, scene),
     };
+    // IAA traces split pixels' sub-samples on the 2^depth× image, with its
+    // tighter depth tolerance (the samples are those of grid:2^depth).
+    let fine = match aa {
+        Aa::Iaa { depth, .. } => Some(Tracer {
+            cam: RayCamera::new(&scene.camera, w << depth, h << depth)
+                .map_err(RenderError::Camera)?,
+            evals: evaluators,
+            colors: tr.colors.clone(),
+            lights: &scene.lights,
+            bounds: b,
+            diag: tr.diag,
+            flat: tr.flat,
+        }),
+        _ => None,
+    };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.threads.unwrap_or(0))
         .build()
@@ -371,11 +386,12 @@ pub fn render_aa(
         tiles
             .par_iter()
             .map(|&(x0, y0, tw, th)| {
-                let mut out = render_tile(&tr, opts, x0 * s, y0 * s, tw * s, th * s, bg_linear);
+                let mut out =
+                    render_tile(&tr, opts, x0 * s, y0 * s, tw * s, th * s, bg_linear, None);
                 if s > 1 {
                     out = downsample(out, s);
                 }
-                anti_alias(&tr, opts, aa, &mut out, bg_linear);
+                anti_alias(&tr, fine.as_ref(), opts, aa, &mut out, bg_linear);
                 let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                 if opts.progress {
                     eprint!("\rrendering: {n}/{n_tiles} tiles");
@@ -492,11 +508,21 @@ fn downsample(t: TileOut, s: u32) -> TileOut {
     }
 }
 
-// Applies IAA to a tile (or, for the other modes, counts its samples).
-fn anti_alias(tr: &Tracer<'_>, opts: &RenderOptions, aa: Aa, t: &mut TileOut, bg: [f64; 3]) {
+// Applies IAA to a tile (or, for the other modes, counts its samples):
+// pixel-area tests, then the split pixels traced together at the fine
+// resolution (`fine`: the tracer of the 2^depth× image), with beams, their
+// other sub-samples masked out.
+fn anti_alias(
+    tr: &Tracer<'_>,
+    fine: Option<&Tracer<'_>>,
+    opts: &RenderOptions,
+    aa: Aa,
+    t: &mut TileOut,
+    bg: [f64; 3],
+) {
     let n = u64::from(t.w * t.h);
-    match aa {
-        Aa::Iaa { threshold, depth } => {
+    match (aa, fine) {
+        (Aa::Iaa { threshold, depth }, Some(fine)) => {
             let t0 = Instant::now();
             let mut st = std::mem::take(&mut t.stats);
             let mut px = aa::TilePixels {
@@ -509,11 +535,48 @@ fn anti_alias(tr: &Tracer<'_>, opts: &RenderOptions, aa: Aa, t: &mut TileOut, bg
                 coverage: &mut t.coverage,
                 samples: &mut t.samples,
             };
-            aa::refine_tile(tr, opts.method, &mut px, bg, threshold, depth, &mut st);
+            let split = aa::classify_tile(tr, &mut px, bg, threshold, &mut st);
+            let f = 1u32 << depth;
+            let sub = (depth > 0 && split.iter().any(|&s| s)).then(|| {
+                let (fw, fh) = (t.w * f, t.h * f);
+                let mask: Vec<bool> = (0..fh)
+                    .flat_map(|j| (0..fw).map(move |i| (i, j)))
+                    .map(|(i, j)| split[((j / f) * t.w + i / f) as usize])
+                    .collect();
+                let fine_opts = RenderOptions {
+                    want_depth: false,
+                    want_normals: false,
+                    want_classify: false,
+                    progress: false,
+                    ..opts.clone()
+                };
+                let out = render_tile(
+                    fine,
+                    &fine_opts,
+                    t.x0 * f,
+                    t.y0 * f,
+                    fw,
+                    fh,
+                    bg,
+                    Some(&mask),
+                );
+                downsample(out, f)
+            });
+            if let Some(s) = &sub {
+                st.merge(&s.stats);
+            }
+            aa::merge_split(
+                &mut px,
+                &split,
+                sub.as_ref()
+                    .map(|s| (&s.linear[..], &s.coverage[..], &s.depth[..])),
+                f * f,
+                &mut st,
+            );
             st.aa_cpu_ms += ms_since(t0);
             t.stats = st;
         }
-        Aa::None | Aa::Grid(_) => {
+        _ => {
             let per = u64::from(aa.grid_factor()).pow(2);
             t.stats.aa_samples += n * per;
             t.stats.aa_samples_max = t.stats.aa_samples_max.max(per);
@@ -560,6 +623,7 @@ fn render_tile(
     tw: u32,
     th: u32,
     background: [f64; 3],
+    mask: Option<&[bool]>,
 ) -> TileOut {
     let mut st = RenderStats::default();
     let t_trace = Instant::now();
@@ -569,7 +633,10 @@ fn render_tile(
     for j in 0..th {
         for i in 0..tw {
             let r = tr.cam.pixel_ray(x0 + i, y0 + j);
-            slabs.push(r.slab(&tr.bounds));
+            // Masked-out samples look like rays outside the bounds: beams
+            // over them are rejected at once.
+            let on = mask.is_none_or(|m| m[(j * tw + i) as usize]);
+            slabs.push(if on { r.slab(&tr.bounds) } else { None });
             rays.push(r);
         }
     }
