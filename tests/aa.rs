@@ -31,7 +31,13 @@ fn load(name: &str) -> (Scene, Vec<Arc<dyn Evaluator>>) {
     (scene, evals)
 }
 
-fn go(scene: &Scene, evals: &[Arc<dyn Evaluator>], size: u32, aa: Aa, threads: usize) -> RenderOutput {
+fn go(
+    scene: &Scene,
+    evals: &[Arc<dyn Evaluator>],
+    size: u32,
+    aa: Aa,
+    threads: usize,
+) -> RenderOutput {
     let mut o = RenderOptions::new(size, size);
     o.threads = Some(threads);
     render_aa(scene, evals, &o, aa).unwrap()
@@ -96,7 +102,10 @@ fn iaa_on_a_sphere_samples_the_interior_once_and_splits_the_silhouette() {
         if !near && plain.hit_mask[k] {
             interior += 1;
             assert_eq!(out.samples[k], 1, "interior pixel {k} split");
-            assert_eq!(out.image.as_raw()[3 * k..3 * k + 3], plain.image.as_raw()[3 * k..3 * k + 3]);
+            assert_eq!(
+                out.image.as_raw()[3 * k..3 * k + 3],
+                plain.image.as_raw()[3 * k..3 * k + 3]
+            );
         }
         if !near && !plain.hit_mask[k] {
             assert_eq!(out.samples[k], 1, "background pixel {k} split");
@@ -225,7 +234,10 @@ fn accuracy_sweep_writes_its_files_and_obeys_the_obvious_relations() {
     // The beam and pixel methods draw the same pixels (their colours
     // differ within the depth tolerance).
     let fam = |f: &str| rows.iter().find(|r| r.family == f).unwrap();
-    assert_eq!(fam("beam").coverage_diff_pct, fam("pixel").coverage_diff_pct);
+    assert_eq!(
+        fam("beam").coverage_diff_pct,
+        fam("pixel").coverage_diff_pct
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use super::{CliError, EvalKind};
-use crate::render::camera::RayCamera;
 use crate::render::aa::{DEFAULT_DEPTH, DEFAULT_THRESHOLD, MAX_DEPTH};
+use crate::render::camera::RayCamera;
 use crate::render::{Aa, MAX_SIZE, Method, RenderOptions, render_aa};
 
 /// Visibility method on the command line.

@@ -4,31 +4,36 @@
 //! # IAA
 //! After the base render (one ray through each pixel centre), each tile is
 //! revisited as beams over the *whole area* of its pixels, starting with
-//! the tile and quartering down to single pixels and then to sub-pixel
-//! cells. A cell's beam gets the front-to-back rejection sweep of
-//! [`super::beam`] over its clipped hull and, where a surface remains, the
-//! inclusion test; the outcome is one of:
-//! - *background*: every ray of the cell misses: no sample and no ray,
-//!   the cell is background exactly;
-//! - *smooth*: every ray of the cell hits one object (the only one that
+//! the tile and quartering down to single pixels. A block's beam gets the
+//! front-to-back rejection sweep of [`super::beam`] over its hull clipped
+//! to the bounds and, where a surface remains, the inclusion test; the
+//! outcome is one of:
+//! - *background*: every ray of the block misses: no extra sample, the
+//!   pixels are background exactly;
+//! - *smooth*: every ray of the block hits one object (the only one that
 //!   may vanish on the included beam piece) in a proven bracket, and the
 //!   interval of the lit colour over that piece — Lambert and Blinn-Phong
 //!   terms bounded with interval arithmetic over the interval of the unit
 //!   normal (from `interval_grad`), the view directions and the light
-//!   directions — is narrower than the threshold in every channel: one
-//!   sample at the cell centre suffices (for a whole pixel: its base ray);
+//!   directions — is narrower than the threshold in every channel: each
+//!   pixel keeps its one base sample;
 //! - *split*: anything else, in particular silhouettes and thin features,
-//!   which the tests cannot settle. Below a pixel, cells are split 2×2 down
-//!   to `depth` levels (at most `4^depth` samples) and the leaves' linear
-//!   colours are averaged with their area as weight.
+//!   which the tests cannot settle. A single pixel that is split gets
+//!   `2^depth × 2^depth` sub-samples: the split pixels of a tile are traced
+//!   together as one beam tile of the `2^depth`× image, every other
+//!   sub-sample masked out, so sub-beams keep splitting 2×2 down to single
+//!   sub-samples and a sub-beam that is rejected contributes background
+//!   exactly, with no ray. Sub-samples sit where `grid:2^depth` puts them
+//!   and have its depth tolerance. Their linear colours are averaged.
 //!
 //! Shadows are not part of the colour interval (proving a shadow edge
 //! absent over a beam needs a shadow beam from a surface patch, which the
-//! surface itself obstructs); a smooth cell takes its shadow state from its
-//! one sample. The pixel's centre ray is never discarded when it is the
-//! only evidence of surface: if every leaf of a split pixel misses but the
-//! centre ray hit, the centre sample joins the average with a leaf's
-//! weight, so an AA render never loses a pixel the plain render drew.
+//! surface itself obstructs); a smooth pixel takes its shadow state from
+//! its one sample, so shadow edges across smooth pixels stay aliased. The
+//! pixel's centre ray is never discarded when it is the only evidence of
+//! surface: if every sub-sample of a split pixel misses but the centre ray
+//! hit, the centre sample joins the average with a sub-sample's weight, so
+//! an AA render never loses a pixel the plain render drew.
 //!
 //! # Grid
 //! `grid:N` traces the image at N× the resolution with the chosen method
@@ -52,6 +57,9 @@ pub const DEFAULT_DEPTH: u32 = 2;
 pub const MAX_DEPTH: u32 = 6;
 /// Largest grid factor.
 pub const MAX_GRID: u32 = 32;
+
+// Bisections of an included bracket before the colour test.
+const NARROW_STEPS: usize = 6;
 
 // Rejection pieces per cell sweep before the cell is declared split.
 const MAX_SWEEP_PIECES: usize = 256;
@@ -188,13 +196,17 @@ pub(crate) fn classify_tile(
     split
 }
 
+/// Per pixel: mean linear colour, covered fraction and nearest hit of the
+/// sub-samples.
+pub(crate) type FineSamples<'a> = (&'a [[f64; 3]], &'a [f64], &'a [f64]);
+
 /// Folds the sub-samples of the split pixels (`fine`: per pixel the mean
 /// linear colour, covered fraction and nearest hit of its `per` samples)
 /// into the tile, and counts the samples.
 pub(crate) fn merge_split(
     px: &mut TilePixels<'_>,
     split: &[bool],
-    fine: Option<(&[[f64; 3]], &[f64], &[f64])>,
+    fine: Option<FineSamples<'_>>,
     per: u32,
     st: &mut RenderStats,
 ) {
@@ -295,7 +307,7 @@ impl Ctx<'_, '_> {
         let bounds = bounds_box(&tr.bounds);
         let t1 = far_t(&corners, &bounds);
         let t0 = t_floor.max(0.0);
-        if !(t0 <= t1) {
+        if t0.partial_cmp(&t1).is_none_or(|o| o.is_gt()) {
             return Decision {
                 cell: Cell::Background,
                 t_floor,
@@ -376,7 +388,22 @@ impl Ctx<'_, '_> {
         for mult in [1.0, 2.0, 4.0] {
             let tb2 = (ta + mult * w).min(t1);
             if whole(Interval::point(tb2), st).hi < 0.0 {
-                let piece = Interval::new(ta, tb2);
+                // Narrow the bracket while a mid cross-section has one
+                // sign: the normal's enclosure over the piece tightens
+                // with its depth.
+                let (mut a, mut b) = (ta, tb2);
+                for _ in 0..NARROW_STEPS {
+                    let m = 0.5 * (a + b);
+                    let fm = whole(Interval::point(m), st);
+                    if fm.lo > 0.0 {
+                        a = m;
+                    } else if fm.hi < 0.0 {
+                        b = m;
+                    } else {
+                        break;
+                    }
+                }
+                let piece = Interval::new(a, b);
                 let smooth = self.smooth_on(&corners, &bounds, piece, st);
                 return Decision {
                     cell: if smooth { Cell::Smooth } else { Cell::Split },
@@ -482,8 +509,8 @@ fn colour_interval(
         let spec = Interval::point(SPECULAR).mul(ndh.powi(SHININESS));
         let lam = Interval::new(ndl.lo.max(0.0), ndl.hi);
         for (ch, out) in c.iter_mut().enumerate() {
-            let mut add = Interval::point(light.color[ch])
-                .mul(Interval::point(color[ch]).mul(lam).add(spec));
+            let mut add =
+                Interval::point(light.color[ch]).mul(Interval::point(color[ch]).mul(lam).add(spec));
             if ndl.lo <= 0.0 {
                 // The light may be behind the surface for some normals.
                 add = Interval::new(add.lo.min(0.0), add.hi.max(0.0));
@@ -523,7 +550,7 @@ fn normalize_iv(g: &IBox) -> Option<IBox> {
         };
         let lo = at(g[i].lo, if g[i].lo >= 0.0 { r.hi } else { r.lo }).lo;
         let hi = at(g[i].hi, if g[i].hi >= 0.0 { r.lo } else { r.hi }).hi;
-        if !(lo <= hi) {
+        if lo.partial_cmp(&hi).is_none_or(|o| o.is_gt()) {
             return None;
         }
         out[i] = Interval::new(lo.max(-1.0), hi.min(1.0));
@@ -581,8 +608,8 @@ mod tests {
         let n = normalize_iv(&g).unwrap();
         for a in [0.5, 1.0, 2.0] {
             for b in [-1.0, 0.0, 0.25] {
-                for c in [3.0, 3.5] {
-                    let l = (a * a + b * b + c * c as f64).sqrt();
+                for c in [3.0f64, 3.5] {
+                    let l = (a * a + b * b + c * c).sqrt();
                     for (i, v) in [a / l, b / l, c / l].iter().enumerate() {
                         assert!(n[i].contains(*v), "{i} {v} {:?}", n[i]);
                     }

@@ -35,8 +35,8 @@ use rayon::prelude::*;
 use crate::eval::{Evaluator, Grad, IntervalGrad};
 use crate::interval::Interval;
 use crate::scene::{Bounds, Light, Scene};
-use camera::{CameraError, IBox, PixelRay, RayCamera};
 pub use aa::Aa;
+use camera::{CameraError, IBox, PixelRay, RayCamera};
 pub use stats::RenderStats;
 
 /// Side of the square tiles traced in parallel.
@@ -482,8 +482,8 @@ fn downsample(t: TileOut, s: u32) -> TileOut {
             for sj in 0..s {
                 for si in 0..s {
                     let src = ((j * s + sj) * t.w + i * s + si) as usize;
-                    for c in 0..3 {
-                        linear[k][c] += t.linear[src][c] * inv;
+                    for (l, v) in linear[k].iter_mut().zip(t.linear[src]) {
+                        *l += v * inv;
                     }
                     if t.depth[src].is_finite() {
                         coverage[k] += inv;
@@ -615,6 +615,7 @@ fn ms_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
+#[allow(clippy::too_many_arguments)]
 fn render_tile(
     tr: &Tracer<'_>,
     opts: &RenderOptions,
