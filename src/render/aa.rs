@@ -44,6 +44,8 @@ use std::fmt;
 
 use super::Tracer;
 use super::camera::{CornerRays, IBox, bounds_box, box_hull, normalize, scale};
+#[cfg(test)]
+use super::shade;
 use super::shade::{AMBIENT, SHININESS, SPECULAR};
 use crate::interval::Interval;
 use crate::render::stats::RenderStats;
@@ -587,6 +589,85 @@ fn far_t(corners: &CornerRays, bounds: &IBox) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::camera::RayCamera;
+    use crate::scene::{Bounds, Camera, Light};
+
+    // The colour interval holds the shaded colour of every normal, view
+    // vector and point in its boxes (lights without shadows here).
+    #[test]
+    fn colour_interval_encloses_the_shading() {
+        let lights = [
+            Light {
+                kind: LightKind::Directional([-0.5, -1.0, -0.7]),
+                color: [1.0, 1.0, 1.0],
+                shadows: false,
+            },
+            Light {
+                kind: LightKind::Point([-4.0, 3.0, 5.0]),
+                color: [0.35, 0.35, 0.4],
+                shadows: false,
+            },
+        ];
+        let tr = Tracer {
+            cam: RayCamera::new(&Camera::default(), 8, 8).unwrap(),
+            evals: &[],
+            colors: vec![],
+            lights: &lights,
+            bounds: Bounds::default(),
+            diag: 7.0,
+            flat: false,
+        };
+        let color = [0.8, 0.3, 0.2];
+        let mut seed = 0x1234_5678_9abc_def0u64;
+        let mut rnd = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..200 {
+            let g0 = [rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0];
+            let w = 0.3 * rnd();
+            let gb: IBox = std::array::from_fn(|i| Interval::new(g0[i], g0[i] + w));
+            let vb: IBox = [
+                Interval::new(0.4, 0.45),
+                Interval::new(0.3, 0.32),
+                Interval::new(0.8, 0.83),
+            ];
+            let pb: IBox = [Interval::new(0.1, 0.2); 3];
+            let (Some(nb), Some(vn)) = (normalize_iv(&gb), normalize_iv(&vb)) else {
+                continue;
+            };
+            let Some(ci) = colour_interval(&tr, color, &nb, &vn, &pb) else {
+                continue;
+            };
+            for _ in 0..20 {
+                let g: [f64; 3] = std::array::from_fn(|i| g0[i] + w * rnd());
+                let Some(n) = normalize(g) else { continue };
+                let v =
+                    normalize(std::array::from_fn(|i| vb[i].lo + rnd() * vb[i].width())).unwrap();
+                let p = [0.1 + 0.1 * rnd(), 0.1 + 0.1 * rnd(), 0.1 + 0.1 * rnd()];
+                let surf = shade::Surf {
+                    p,
+                    n,
+                    q: p,
+                    v,
+                    min_w: 1e-3,
+                    color,
+                };
+                let mut st = RenderStats::default();
+                let c = shade::shade(&tr, &surf, &[true, true], &mut st);
+                for ch in 0..3 {
+                    assert!(
+                        ci[ch].lo - 1e-12 <= c[ch] && c[ch] <= ci[ch].hi + 1e-12,
+                        "{ch}: {} not in {:?}",
+                        c[ch],
+                        ci[ch]
+                    );
+                }
+            }
+        }
+    }
 
     #[test]
     fn modes_parse() {

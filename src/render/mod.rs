@@ -11,6 +11,11 @@
 //! [`Method::Point`] (fixed-step point sampling, the technique the paper
 //! improves on).
 //!
+//! [`aa`] adds anti-aliasing on top of any method ([`render_aa`]):
+//! interval adaptive (extra samples only where a pixel's beam cannot
+//! prove one smoothly lit surface) or regular grid supersampling;
+//! [`accuracy`] measures every method against a supersampled reference.
+//!
 //! The scene function is the minimum over the objects; the object hit is
 //! the one whose own f is smallest at the hit point. Output is identical
 //! for any thread count: every tile is computed independently and the
@@ -110,7 +115,8 @@ pub struct RenderOutput {
     /// How each pixel was decided if asked for: blue rejected block,
     /// green included block, red single ray, black outside the bounds.
     pub classify: Option<RgbImage>,
-    /// Row-major: whether the pixel's ray hit a surface.
+    /// Row-major: whether the pixel's ray hit a surface (with
+    /// anti-aliasing: whether any of its samples did).
     pub hit_mask: Vec<bool>,
     /// Row-major: the ray parameter of the hit, +inf for none (with
     /// anti-aliasing: the nearest hit among the pixel's samples).
