@@ -175,6 +175,8 @@ enum Cell {
 struct Decision {
     cell: Cell,
     t_floor: f64,
+    /// The beam was included: only the colour interval was too wide.
+    by_shading: bool,
 }
 
 /// The pixel-area tests of IAA over one tile whose base render is in
@@ -285,6 +287,7 @@ impl Ctx<'_, '_> {
         }
         if bx1 - bx0 == 1 && by1 - by0 == 1 {
             split[(by0 * px.w + bx0) as usize] = true;
+            st.aa_split_by_shading += u64::from(d.by_shading);
             return;
         }
         let mx = (bx0 + bx1).div_ceil(2);
@@ -304,6 +307,7 @@ impl Ctx<'_, '_> {
         let split = |t_floor| Decision {
             cell: Cell::Split,
             t_floor,
+            by_shading: false,
         };
         let corners = tr.cam.corners(xs, ys);
         let bounds = bounds_box(&tr.bounds);
@@ -313,6 +317,7 @@ impl Ctx<'_, '_> {
             return Decision {
                 cell: Cell::Background,
                 t_floor,
+                by_shading: false,
             };
         }
         let side = (xs.1 - xs.0).max(ys.1 - ys.0);
@@ -341,6 +346,7 @@ impl Ctx<'_, '_> {
                     Cell::Split
                 },
                 t_floor,
+                by_shading: false,
             };
         }
         let mut stack = vec![(t0, t1)];
@@ -366,6 +372,7 @@ impl Ctx<'_, '_> {
             return Decision {
                 cell: Cell::Background,
                 t_floor,
+                by_shading: false,
             };
         };
         // Inclusion: the unclipped cross-sections at ta (positive) and at
@@ -408,8 +415,13 @@ impl Ctx<'_, '_> {
                 let piece = Interval::new(a, b);
                 let smooth = self.smooth_on(&corners, &bounds, piece, st);
                 return Decision {
-                    cell: if smooth { Cell::Smooth } else { Cell::Split },
+                    cell: if smooth == Some(true) {
+                        Cell::Smooth
+                    } else {
+                        Cell::Split
+                    },
                     t_floor: ta,
+                    by_shading: smooth == Some(false),
                 };
             }
             if tb2 >= t1 {
@@ -419,20 +431,21 @@ impl Ctx<'_, '_> {
         split(ta)
     }
 
-    // Whether one object alone may vanish on the beam piece, it decreases
-    // strictly along every ray there, and the lit colour's interval over
-    // the piece is narrower than the threshold.
+    // None unless one object alone may vanish on the beam piece and it
+    // decreases strictly along every ray there (facing the viewer
+    // throughout); then whether the lit colour's interval over the piece
+    // is narrower than the threshold.
     fn smooth_on(
         &self,
         corners: &CornerRays,
         bounds: &IBox,
         piece: Interval,
         st: &mut RenderStats,
-    ) -> bool {
+    ) -> Option<bool> {
         let tr = self.tr;
         let hb = corners.hull(piece);
         if (0..3).any(|i| hb[i].lo < bounds[i].lo || hb[i].hi > bounds[i].hi) {
-            return false;
+            return None;
         }
         let mut only = None;
         for k in 0..tr.evals.len() {
@@ -441,42 +454,36 @@ impl Ctx<'_, '_> {
                 continue;
             }
             if only.is_some() {
-                return false;
+                return None;
             }
             only = Some(k);
         }
-        let Some(k) = only else {
-            return false;
-        };
+        let k = only?;
         let c = &corners.0;
         let dirs = box_hull(box_hull(c[0].1, c[1].1), box_hull(c[2].1, c[3].1));
         let g = tr.interval_grad(k, hb, st);
         if !g.d.iter().all(|d| d.lo.is_finite() && d.hi.is_finite()) {
-            return false;
+            return None;
         }
         let dfdt = dot_iv(&g.d, &dirs);
         if dfdt.is_empty() || dfdt.hi >= 0.0 {
-            return false;
+            return None;
         }
-        let Some(nout) = normalize_iv(&g.d) else {
-            return false;
-        };
-        let Some(v) = normalize_iv(&dirs.map(|d| d.neg())) else {
-            return false;
-        };
+        let nout = normalize_iv(&g.d)?;
+        let v = normalize_iv(&dirs.map(|d| d.neg()))?;
         let facing = dot_iv(&nout, &v);
         let n = if facing.lo > 0.0 {
             nout
         } else if facing.hi < 0.0 {
             nout.map(|c| c.neg())
         } else {
-            return false;
+            return None;
         };
-        let Some(col) = colour_interval(tr, tr.colors[k], &n, &v, &hb) else {
-            return false;
-        };
-        col.iter()
-            .all(|c| c.hi.clamp(0.0, 1.0) - c.lo.clamp(0.0, 1.0) <= self.threshold)
+        let col = colour_interval(tr, tr.colors[k], &n, &v, &hb)?;
+        Some(
+            col.iter()
+                .all(|c| c.hi.clamp(0.0, 1.0) - c.lo.clamp(0.0, 1.0) <= self.threshold),
+        )
     }
 }
 

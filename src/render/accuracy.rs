@@ -65,7 +65,8 @@ impl Variant {
 
 /// The default sweep: point sampling at 16, 64 and 256 steps, the pixel
 /// and beam methods, beam + grid:2 and grid:4, and beam + IAA (depth 2) at
-/// thresholds 1/4, 1/16 and 1/64.
+/// thresholds 1 (every included pixel is smooth: geometry alone decides),
+/// 1/4, 1/16 and 1/64.
 pub fn default_variants() -> Vec<Variant> {
     let mut v = Vec::new();
     for steps in [16, 64, 256] {
@@ -86,7 +87,7 @@ pub fn default_variants() -> Vec<Variant> {
             Aa::Grid(n),
         ));
     }
-    for d in [4u32, 16, 64] {
+    for d in [1u32, 4, 16, 64] {
         v.push(Variant::new(
             "beam+iaa",
             &format!("t=1/{d}"),
@@ -415,6 +416,8 @@ fn draw_panel(
         .configure_mesh()
         .x_desc("render time (ms, log)")
         .y_desc("RMSE of linear colour (log)")
+        .x_labels(6)
+        .y_labels(8)
         .label_style(("sans-serif", 14))
         .axis_desc_style(("sans-serif", 15))
         .x_label_formatter(&|v| format!("{v:.0}"))

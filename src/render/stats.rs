@@ -48,6 +48,9 @@ pub struct RenderStats {
     pub aa_samples_max: u64,
     /// Pixels given more than one sample.
     pub aa_pixels_split: u64,
+    /// IAA pixels split only because their colour interval was too wide
+    /// (their beam passed the inclusion test).
+    pub aa_split_by_shading: u64,
     /// Anti-aliasing tests and extra samples, summed over threads, ms.
     pub aa_cpu_ms: f64,
     /// Render wall time, ms (excludes parsing and compiling).
@@ -88,6 +91,7 @@ impl RenderStats {
         self.aa_samples += o.aa_samples;
         self.aa_samples_max = self.aa_samples_max.max(o.aa_samples_max);
         self.aa_pixels_split += o.aa_pixels_split;
+        self.aa_split_by_shading += o.aa_split_by_shading;
         self.aa_cpu_ms += o.aa_cpu_ms;
         self.trace_cpu_ms += o.trace_cpu_ms;
         self.shade_cpu_ms += o.shade_cpu_ms;
@@ -127,6 +131,7 @@ impl RenderStats {
             "aa_samples_mean": self.aa_samples_mean(),
             "aa_samples_max": self.aa_samples_max,
             "aa_pixels_split": self.aa_pixels_split,
+            "aa_split_by_shading": self.aa_split_by_shading,
             "aa_cpu_ms": self.aa_cpu_ms,
             "time_ms": self.time_ms,
             "compile_ms": self.compile_ms,
@@ -167,10 +172,11 @@ impl fmt::Display for RenderStats {
         )?;
         writeln!(
             f,
-            "anti-aliasing: {:.2} samples per pixel (max {}), {} pixels split",
+            "anti-aliasing: {:.2} samples per pixel (max {}), {} pixels split ({} by shading alone)",
             self.aa_samples_mean(),
             self.aa_samples_max,
-            self.aa_pixels_split
+            self.aa_pixels_split,
+            self.aa_split_by_shading
         )?;
         write!(
             f,
