@@ -1,6 +1,7 @@
 //! The command-line interface: one module per subcommand; `main.rs` only
 //! parses arguments and reports errors.
 
+pub mod accuracy;
 pub mod bench;
 pub mod eval;
 pub mod ir;

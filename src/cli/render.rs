@@ -6,8 +6,9 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use super::{CliError, EvalKind};
+use crate::render::aa::{DEFAULT_DEPTH, DEFAULT_THRESHOLD, MAX_DEPTH};
 use crate::render::camera::RayCamera;
-use crate::render::{MAX_SIZE, Method, RenderOptions, render};
+use crate::render::{Aa, MAX_SIZE, Method, RenderOptions, render_aa};
 
 /// Visibility method on the command line.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, clap::ValueEnum, Default)]
@@ -41,6 +42,24 @@ pub struct Args {
     /// Samples per ray for `--method point` (cost is linear in it).
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub steps: u32,
+    /// Anti-aliasing: `none`, `iaa` (interval adaptive: extra samples only
+    /// where the pixel's beam cannot prove one smooth surface) or `grid:N`
+    /// (N×N samples in every pixel, the baseline).
+    #[arg(long, default_value = "none", value_parser = parse_aa)]
+    pub aa: Aa,
+    /// IAA: largest width of a pixel's colour interval (linear light, per
+    /// channel) that one sample may stand for (default 1/64).
+    #[arg(long, default_value_t = DEFAULT_THRESHOLD, value_parser = parse_threshold)]
+    pub aa_threshold: f64,
+    /// IAA: levels of 2×2 splitting below a pixel (up to 4^D samples).
+    #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(0..=MAX_DEPTH as i64))]
+    pub aa_depth: u32,
+    /// Render the slow, trustworthy reference instead: 16×16 samples per
+    /// pixel, each a guaranteed interval ray (`--method pixel`) at 16× the
+    /// resolution, so a 16× tighter depth tolerance; overrides --method
+    /// and --aa.
+    #[arg(long)]
+    pub reference: bool,
     /// Evaluator: native code (default) or the reference interpreter.
     #[arg(long = "eval", value_enum, default_value_t = EvalKind::Jit)]
     pub eval: EvalKind,
@@ -79,6 +98,45 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
     };
     Ok((side(w)?, side(h)?))
 }
+
+/// Parses an `--aa` value.
+pub fn parse_aa(s: &str) -> Result<Aa, String> {
+    Aa::parse(s)
+}
+
+fn parse_threshold(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .parse()
+        .map_err(|_| format!("threshold `{s}` is not a number"))?;
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("threshold `{s}` must be finite and ≥ 0"))
+    }
+}
+
+/// The anti-aliasing and method the arguments ask for.
+pub fn aa_and_method(args: &Args) -> (Aa, Method) {
+    if args.reference {
+        return (REFERENCE_AA, Method::Pixel);
+    }
+    let aa = match args.aa {
+        Aa::Iaa { .. } => Aa::Iaa {
+            threshold: args.aa_threshold,
+            depth: args.aa_depth,
+        },
+        other => other,
+    };
+    let method = match args.method {
+        MethodArg::Beam => Method::Beam,
+        MethodArg::Pixel => Method::Pixel,
+        MethodArg::Point => Method::Point { steps: args.steps },
+    };
+    (aa, method)
+}
+
+/// Anti-aliasing of the reference render (with [`Method::Pixel`]).
+pub const REFERENCE_AA: Aa = Aa::Grid(16);
 
 /// Output files opened before rendering, so an unwritable path fails
 /// fast; files this run created are removed again if it fails.
@@ -140,21 +198,18 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     let evaluators = super::build_evaluators(&scene, args.eval)?;
     let compile_ms = t.elapsed().as_secs_f64() * 1e3;
 
+    let (aa, method) = aa_and_method(args);
     let opts = RenderOptions {
         width,
         height,
         threads: args.threads.map(|n| n as usize),
-        method: match args.method {
-            MethodArg::Beam => Method::Beam,
-            MethodArg::Pixel => Method::Pixel,
-            MethodArg::Point => Method::Point { steps: args.steps },
-        },
+        method,
         want_depth: args.depth.is_some(),
         want_normals: args.normals.is_some(),
         want_classify: args.classify.is_some(),
         progress: !args.quiet && std::io::stderr().is_terminal(),
     };
-    let mut out = render(&scene, &evaluators, &opts)?;
+    let mut out = render_aa(&scene, &evaluators, &opts, aa)?;
     out.stats.compile_ms = compile_ms;
 
     let png = |img: &dyn Fn(&Path) -> image::ImageResult<()>, p: &Path| -> Result<(), CliError> {
@@ -196,6 +251,38 @@ mod tests {
         assert!(parse_size("16385x10").is_err());
         assert!(parse_size("10").is_err());
         assert!(parse_size("axb").is_err());
+    }
+
+    #[test]
+    fn aa_flags_parse() {
+        use clap::Parser;
+        #[derive(clap::Parser)]
+        struct Cli {
+            #[command(flatten)]
+            args: Args,
+        }
+        let p = |extra: &[&str]| {
+            let mut v = vec!["ibeam", "s.ib", "-o", "o.png"];
+            v.extend_from_slice(extra);
+            Cli::try_parse_from(v).map(|c| aa_and_method(&c.args))
+        };
+        assert_eq!(p(&[]).unwrap(), (Aa::None, Method::Beam));
+        assert_eq!(p(&["--aa", "grid:3"]).unwrap(), (Aa::Grid(3), Method::Beam));
+        assert_eq!(
+            p(&["--aa", "iaa", "--aa-threshold", "0.1", "--aa-depth", "3"]).unwrap(),
+            (
+                Aa::Iaa {
+                    threshold: 0.1,
+                    depth: 3
+                },
+                Method::Beam
+            )
+        );
+        assert_eq!(p(&["--reference"]).unwrap(), (REFERENCE_AA, Method::Pixel));
+        assert!(p(&["--aa", "grid:0"]).is_err());
+        assert!(p(&["--aa", "fxaa"]).is_err());
+        assert!(p(&["--aa-threshold", "-1"]).is_err());
+        assert!(p(&["--aa-depth", "9"]).is_err());
     }
 
     #[test]

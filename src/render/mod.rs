@@ -11,11 +11,18 @@
 //! [`Method::Point`] (fixed-step point sampling, the technique the paper
 //! improves on).
 //!
+//! [`aa`] adds anti-aliasing on top of any method ([`render_aa`]):
+//! interval adaptive (extra samples only where a pixel's beam cannot
+//! prove one smoothly lit surface) or regular grid supersampling;
+//! [`accuracy`] measures every method against a supersampled reference.
+//!
 //! The scene function is the minimum over the objects; the object hit is
 //! the one whose own f is smallest at the hit point. Output is identical
 //! for any thread count: every tile is computed independently and the
 //! results and counters are merged in tile order.
 
+pub mod aa;
+pub mod accuracy;
 pub mod beam;
 pub mod camera;
 pub mod output;
@@ -33,6 +40,7 @@ use rayon::prelude::*;
 use crate::eval::{Evaluator, Grad, IntervalGrad};
 use crate::interval::Interval;
 use crate::scene::{Bounds, Light, Scene};
+pub use aa::Aa;
 use camera::{CameraError, IBox, PixelRay, RayCamera};
 pub use stats::RenderStats;
 
@@ -107,10 +115,19 @@ pub struct RenderOutput {
     /// How each pixel was decided if asked for: blue rejected block,
     /// green included block, red single ray, black outside the bounds.
     pub classify: Option<RgbImage>,
-    /// Row-major: whether the pixel's ray hit a surface.
+    /// Row-major: whether the pixel's ray hit a surface (with
+    /// anti-aliasing: whether any of its samples did).
     pub hit_mask: Vec<bool>,
-    /// Row-major: the ray parameter of the hit, +inf for none.
+    /// Row-major: the ray parameter of the hit, +inf for none (with
+    /// anti-aliasing: the nearest hit among the pixel's samples).
     pub depth_t: Vec<f64>,
+    /// Row-major: linear colour, the area-weighted mean over the pixel's
+    /// samples (one sample without anti-aliasing).
+    pub linear: Vec<[f64; 3]>,
+    /// Row-major: fraction of the pixel (by sample area) whose samples hit.
+    pub coverage: Vec<f64>,
+    /// Row-major: samples taken in the pixel (1 without anti-aliasing).
+    pub samples: Vec<u32>,
     /// Counters and times.
     pub stats: RenderStats,
 }
@@ -135,6 +152,8 @@ pub enum RenderError {
     BadBounds,
     /// The thread pool could not be built.
     Threads(String),
+    /// Anti-aliasing parameters out of range.
+    BadAa(String),
 }
 
 impl std::fmt::Display for RenderError {
@@ -154,6 +173,7 @@ impl std::fmt::Display for RenderError {
             RenderError::Camera(e) => write!(f, "bad camera: {e}"),
             RenderError::BadBounds => write!(f, "scene bounds are empty or not finite"),
             RenderError::Threads(e) => write!(f, "cannot start render threads: {e}"),
+            RenderError::BadAa(e) => write!(f, "bad anti-aliasing: {e}"),
         }
     }
 }
@@ -274,7 +294,9 @@ struct TileOut {
     y0: u32,
     w: u32,
     h: u32,
-    color: Vec<Rgb<u8>>,
+    linear: Vec<[f64; 3]>,
+    coverage: Vec<f64>,
+    samples: Vec<u32>,
     // Kept compact: a full-size render holds every tile at once.
     depth: Vec<f64>,
     normals: Option<Vec<Rgb<u8>>>,
@@ -290,10 +312,29 @@ pub fn render(
     evaluators: &[Arc<dyn Evaluator>],
     opts: &RenderOptions,
 ) -> Result<RenderOutput, RenderError> {
+    render_aa(scene, evaluators, opts, Aa::None)
+}
+
+/// [`render`] with anti-aliasing (see [`aa`]). The depth, normal and
+/// classification images of a `grid:N` render show one sample per pixel
+/// (the one right of and below the centre).
+pub fn render_aa(
+    scene: &Scene,
+    evaluators: &[Arc<dyn Evaluator>],
+    opts: &RenderOptions,
+    aa: Aa,
+) -> Result<RenderOutput, RenderError> {
     let start = Instant::now();
     let (w, h) = (opts.width, opts.height);
     if w == 0 || h == 0 || w > MAX_SIZE || h > MAX_SIZE {
         return Err(RenderError::BadSize(w, h));
+    }
+    aa.validate().map_err(RenderError::BadAa)?;
+    let s = aa.grid_factor();
+    if u64::from(w.max(h)) * u64::from(s) > u64::from(u32::MAX / 2) {
+        return Err(RenderError::BadAa(format!(
+            "grid:{s} on {w}x{h} is too many samples"
+        )));
     }
     if scene.objects.is_empty() {
         return Err(RenderError::NoObjects);
@@ -308,7 +349,7 @@ pub fn render(
     if !(0..3).all(|i| b.min[i].is_finite() && b.max[i].is_finite() && b.min[i] <= b.max[i]) {
         return Err(RenderError::BadBounds);
     }
-    let cam = RayCamera::new(&scene.camera, w, h).map_err(RenderError::Camera)?;
+    let cam = RayCamera::new(&scene.camera, w * s, h * s).map_err(RenderError::Camera)?;
     let tr = Tracer {
         cam,
         evals: evaluators,
@@ -317,6 +358,21 @@ pub fn render(
         bounds: b,
         diag: camera::norm(camera::sub(b.max, b.min)),
         flat: constant_along_rays(&cam, scene),
+    };
+    // IAA traces split pixels' sub-samples on the 2^depth× image, with its
+    // tighter depth tolerance (the samples are those of grid:2^depth).
+    let fine = match aa {
+        Aa::Iaa { depth, .. } => Some(Tracer {
+            cam: RayCamera::new(&scene.camera, w << depth, h << depth)
+                .map_err(RenderError::Camera)?,
+            evals: evaluators,
+            colors: tr.colors.clone(),
+            lights: &scene.lights,
+            bounds: b,
+            diag: tr.diag,
+            flat: tr.flat,
+        }),
+        _ => None,
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.threads.unwrap_or(0))
@@ -330,12 +386,18 @@ pub fn render(
     }
     let done = AtomicUsize::new(0);
     let n_tiles = tiles.len();
-    let background = output::srgb_pixel(scene.render.background);
+    let bg_linear = scene.render.background;
+    let background = output::srgb_pixel(bg_linear);
     let outs: Vec<TileOut> = pool.install(|| {
         tiles
             .par_iter()
             .map(|&(x0, y0, tw, th)| {
-                let out = render_tile(&tr, opts, x0, y0, tw, th, background);
+                let mut out =
+                    render_tile(&tr, opts, x0 * s, y0 * s, tw * s, th * s, bg_linear, None);
+                if s > 1 {
+                    out = downsample(out, s);
+                }
+                anti_alias(&tr, fine.as_ref(), opts, aa, &mut out, bg_linear);
                 let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                 if opts.progress {
                     eprint!("\rrendering: {n}/{n_tiles} tiles");
@@ -355,6 +417,9 @@ pub fn render(
         ..RenderStats::default()
     };
     let mut color = vec![background; npx];
+    let mut linear = vec![bg_linear; npx];
+    let mut coverage = vec![0.0; npx];
+    let mut samples = vec![1u32; npx];
     let mut hit_mask = vec![false; npx];
     let mut depth_t = vec![f64::INFINITY; npx];
     let mut normals = opts.want_normals.then(|| vec![Rgb([0u8; 3]); npx]);
@@ -365,7 +430,10 @@ pub fn render(
             for i in 0..t.w {
                 let src = (j * t.w + i) as usize;
                 let dst = ((t.y0 + j) as usize) * (w as usize) + (t.x0 + i) as usize;
-                color[dst] = t.color[src];
+                color[dst] = output::srgb_pixel(t.linear[src]);
+                linear[dst] = t.linear[src];
+                coverage[dst] = t.coverage[src];
+                samples[dst] = t.samples[src];
                 depth_t[dst] = t.depth[src];
                 hit_mask[dst] = t.depth[src].is_finite();
                 if let (Some(n), Some(tn)) = (normals.as_mut(), t.normals.as_ref()) {
@@ -391,8 +459,138 @@ pub fn render(
         classify,
         hit_mask,
         depth_t,
+        linear,
+        coverage,
+        samples,
         stats,
     })
+}
+
+// Averages each s×s block of a tile traced at s× resolution, in linear
+// light. Depth: the nearest hit; normals and classes: the sample at
+// (s/2, s/2) of the block.
+fn downsample(t: TileOut, s: u32) -> TileOut {
+    let (w, h) = (t.w / s, t.h / s);
+    let n = (w * h) as usize;
+    let inv = 1.0 / f64::from(s * s);
+    let mut linear = vec![[0.0; 3]; n];
+    let mut coverage = vec![0.0; n];
+    let mut depth = vec![f64::INFINITY; n];
+    let pick = |v: &Vec<Rgb<u8>>| -> Vec<Rgb<u8>> {
+        (0..h)
+            .flat_map(|j| (0..w).map(move |i| (i, j)))
+            .map(|(i, j)| v[((j * s + s / 2) * t.w + i * s + s / 2) as usize])
+            .collect()
+    };
+    for j in 0..h {
+        for i in 0..w {
+            let k = (j * w + i) as usize;
+            for sj in 0..s {
+                for si in 0..s {
+                    let src = ((j * s + sj) * t.w + i * s + si) as usize;
+                    for (l, v) in linear[k].iter_mut().zip(t.linear[src]) {
+                        *l += v * inv;
+                    }
+                    if t.depth[src].is_finite() {
+                        coverage[k] += inv;
+                        depth[k] = depth[k].min(t.depth[src]);
+                    }
+                }
+            }
+        }
+    }
+    TileOut {
+        x0: t.x0 / s,
+        y0: t.y0 / s,
+        w,
+        h,
+        linear,
+        coverage,
+        samples: vec![s * s; n],
+        depth,
+        normals: t.normals.as_ref().map(pick),
+        class: t.class.as_ref().map(pick),
+        stats: t.stats,
+    }
+}
+
+// Applies IAA to a tile (or, for the other modes, counts its samples):
+// pixel-area tests, then the split pixels traced together at the fine
+// resolution (`fine`: the tracer of the 2^depth× image), with beams, their
+// other sub-samples masked out.
+fn anti_alias(
+    tr: &Tracer<'_>,
+    fine: Option<&Tracer<'_>>,
+    opts: &RenderOptions,
+    aa: Aa,
+    t: &mut TileOut,
+    bg: [f64; 3],
+) {
+    let n = u64::from(t.w * t.h);
+    match (aa, fine) {
+        (Aa::Iaa { threshold, depth }, Some(fine)) => {
+            let t0 = Instant::now();
+            let mut st = std::mem::take(&mut t.stats);
+            let mut px = aa::TilePixels {
+                x0: t.x0,
+                y0: t.y0,
+                w: t.w,
+                h: t.h,
+                linear: &mut t.linear,
+                depth: &mut t.depth,
+                coverage: &mut t.coverage,
+                samples: &mut t.samples,
+            };
+            let split = aa::classify_tile(tr, &mut px, bg, threshold, &mut st);
+            let f = 1u32 << depth;
+            let sub = (depth > 0 && split.iter().any(|&s| s)).then(|| {
+                let (fw, fh) = (t.w * f, t.h * f);
+                let mask: Vec<bool> = (0..fh)
+                    .flat_map(|j| (0..fw).map(move |i| (i, j)))
+                    .map(|(i, j)| split[((j / f) * t.w + i / f) as usize])
+                    .collect();
+                let fine_opts = RenderOptions {
+                    want_depth: false,
+                    want_normals: false,
+                    want_classify: false,
+                    progress: false,
+                    ..opts.clone()
+                };
+                let out = render_tile(
+                    fine,
+                    &fine_opts,
+                    t.x0 * f,
+                    t.y0 * f,
+                    fw,
+                    fh,
+                    bg,
+                    Some(&mask),
+                );
+                downsample(out, f)
+            });
+            if let Some(s) = &sub {
+                st.merge(&s.stats);
+            }
+            aa::merge_split(
+                &mut px,
+                &split,
+                sub.as_ref()
+                    .map(|s| (&s.linear[..], &s.coverage[..], &s.depth[..])),
+                f * f,
+                &mut st,
+            );
+            st.aa_cpu_ms += ms_since(t0);
+            t.stats = st;
+        }
+        _ => {
+            let per = u64::from(aa.grid_factor()).pow(2);
+            t.stats.aa_samples += n * per;
+            t.stats.aa_samples_max = t.stats.aa_samples_max.max(per);
+            if per > 1 {
+                t.stats.aa_pixels_split += n;
+            }
+        }
+    }
 }
 
 // Whether every object is constant along every ray: the camera is
@@ -423,6 +621,7 @@ fn ms_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
+#[allow(clippy::too_many_arguments)]
 fn render_tile(
     tr: &Tracer<'_>,
     opts: &RenderOptions,
@@ -430,7 +629,8 @@ fn render_tile(
     y0: u32,
     tw: u32,
     th: u32,
-    background: Rgb<u8>,
+    background: [f64; 3],
+    mask: Option<&[bool]>,
 ) -> TileOut {
     let mut st = RenderStats::default();
     let t_trace = Instant::now();
@@ -440,7 +640,10 @@ fn render_tile(
     for j in 0..th {
         for i in 0..tw {
             let r = tr.cam.pixel_ray(x0 + i, y0 + j);
-            slabs.push(r.slab(&tr.bounds));
+            // Masked-out samples look like rays outside the bounds: beams
+            // over them are rejected at once.
+            let on = mask.is_none_or(|m| m[(j * tw + i) as usize]);
+            slabs.push(if on { r.slab(&tr.bounds) } else { None });
             rays.push(r);
         }
     }
@@ -527,7 +730,7 @@ fn render_tile(
     st.shadow_cpu_ms += ms_since(t_shadow);
 
     let t_shade = Instant::now();
-    let mut color = vec![background; n];
+    let mut linear = vec![background; n];
     let mut normals = opts.want_normals.then(|| vec![Rgb([0u8; 3]); n]);
     let mut shadow_ms = 0.0;
     for k in 0..n {
@@ -535,7 +738,7 @@ fn render_tile(
             let t0 = Instant::now();
             let c = shade::shade(tr, s, &lit_by_beam[k * nl..(k + 1) * nl], &mut st);
             shadow_ms += ms_since(t0);
-            color[k] = output::srgb_pixel(c);
+            linear[k] = c;
             if let Some(nv) = normals.as_mut() {
                 nv[k] = output::normal_pixel(Some(s.n));
             }
@@ -549,7 +752,13 @@ fn render_tile(
         y0,
         w: tw,
         h: th,
-        color,
+        coverage: tile
+            .hits
+            .iter()
+            .map(|h| if h.is_some() { 1.0 } else { 0.0 })
+            .collect(),
+        linear,
+        samples: vec![1; n],
         depth: tile
             .hits
             .iter()

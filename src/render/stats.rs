@@ -41,6 +41,18 @@ pub struct RenderStats {
     pub blocks_included: u64,
     /// Blocks (over one pixel) split or handed to single rays.
     pub blocks_undecided: u64,
+    /// Samples summed over pixels (a rejected sub-pixel cell counts as
+    /// one sample, traced by no ray).
+    pub aa_samples: u64,
+    /// Most samples in one pixel.
+    pub aa_samples_max: u64,
+    /// Pixels given more than one sample.
+    pub aa_pixels_split: u64,
+    /// IAA pixels split only because their colour interval was too wide
+    /// (their beam passed the inclusion test).
+    pub aa_split_by_shading: u64,
+    /// Anti-aliasing tests and extra samples, summed over threads, ms.
+    pub aa_cpu_ms: f64,
     /// Render wall time, ms (excludes parsing and compiling).
     pub time_ms: f64,
     /// Time to build the evaluators, ms (set by the caller).
@@ -76,12 +88,28 @@ impl RenderStats {
         self.blocks_rejected += o.blocks_rejected;
         self.blocks_included += o.blocks_included;
         self.blocks_undecided += o.blocks_undecided;
+        self.aa_samples += o.aa_samples;
+        self.aa_samples_max = self.aa_samples_max.max(o.aa_samples_max);
+        self.aa_pixels_split += o.aa_pixels_split;
+        self.aa_split_by_shading += o.aa_split_by_shading;
+        self.aa_cpu_ms += o.aa_cpu_ms;
         self.trace_cpu_ms += o.trace_cpu_ms;
         self.shade_cpu_ms += o.shade_cpu_ms;
         self.shadow_cpu_ms += o.shadow_cpu_ms;
     }
 
-    /// The statistics as a JSON object (key names = field names).
+    /// Mean samples per pixel.
+    pub fn aa_samples_mean(&self) -> f64 {
+        let px = u64::from(self.width) * u64::from(self.height);
+        if px == 0 {
+            0.0
+        } else {
+            self.aa_samples as f64 / px as f64
+        }
+    }
+
+    /// The statistics as a JSON object (key names = field names, and
+    /// `aa_samples_mean` in place of `aa_samples`).
     pub fn to_json(&self) -> serde_json::Value {
         serde_json::json!({
             "width": self.width,
@@ -100,6 +128,11 @@ impl RenderStats {
             "blocks_rejected": self.blocks_rejected,
             "blocks_included": self.blocks_included,
             "blocks_undecided": self.blocks_undecided,
+            "aa_samples_mean": self.aa_samples_mean(),
+            "aa_samples_max": self.aa_samples_max,
+            "aa_pixels_split": self.aa_pixels_split,
+            "aa_split_by_shading": self.aa_split_by_shading,
+            "aa_cpu_ms": self.aa_cpu_ms,
             "time_ms": self.time_ms,
             "compile_ms": self.compile_ms,
             "trace_cpu_ms": self.trace_cpu_ms,
@@ -137,10 +170,22 @@ impl fmt::Display for RenderStats {
             "shadow rays {}, saved by {} of {} shadow beams {}",
             self.shadow_rays, self.shadow_beams_ok, self.shadow_beams, self.shadow_rays_saved
         )?;
+        writeln!(
+            f,
+            "anti-aliasing: {:.2} samples per pixel (max {}), {} pixels split ({} by shading alone)",
+            self.aa_samples_mean(),
+            self.aa_samples_max,
+            self.aa_pixels_split,
+            self.aa_split_by_shading
+        )?;
         write!(
             f,
-            "cpu ms: trace {:.1}, shade {:.1}, shadow {:.1}; output {:.1} ms",
-            self.trace_cpu_ms, self.shade_cpu_ms, self.shadow_cpu_ms, self.output_ms
+            "cpu ms: trace {:.1}, shade {:.1}, shadow {:.1}, aa {:.1}; output {:.1} ms",
+            self.trace_cpu_ms,
+            self.shade_cpu_ms,
+            self.shadow_cpu_ms,
+            self.aa_cpu_ms,
+            self.output_ms
         )
     }
 }

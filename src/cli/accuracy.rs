@@ -1,0 +1,69 @@
+//! `ibeam bench accuracy`: time against error of every method and
+//! anti-aliasing mode, against a 16×16-supersampled guaranteed reference
+//! (see [`crate::render::accuracy`]). Ready to be wired in as a `bench`
+//! subcommand: `What::Accuracy(accuracy::Args)` → `accuracy::run`.
+
+use std::path::PathBuf;
+
+use super::{CliError, EvalKind};
+use crate::render::MAX_SIZE;
+use crate::render::accuracy::run_accuracy;
+
+/// Arguments of `ibeam bench accuracy`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Scenes to sweep (default: orthocircle, metaballs and the CSG scene).
+    pub scenes: Vec<PathBuf>,
+    /// Directory for accuracy.csv and accuracy.png (created if missing).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Square image size; the reference traces 256 rays per pixel, so
+    /// its cost grows fast with this.
+    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(1..=MAX_SIZE as i64))]
+    pub size: u32,
+    /// Evaluator: native code (default) or the reference interpreter.
+    #[arg(long = "eval", value_enum, default_value_t = EvalKind::Jit)]
+    pub eval: EvalKind,
+}
+
+/// Runs the sweep and prints the table.
+pub fn run(args: &Args) -> Result<(), CliError> {
+    let scenes = if args.scenes.is_empty() {
+        ["orthocircle", "metaballs", "csg"]
+            .iter()
+            .map(|s| PathBuf::from(format!("examples/{s}.ib")))
+            .collect()
+    } else {
+        args.scenes.clone()
+    };
+    let kind = args.eval;
+    let make = move |scene: &crate::scene::Scene| {
+        super::build_evaluators(scene, kind).map_err(|e| e.to_string())
+    };
+    let rows = run_accuracy(&scenes, &args.out, args.size, &make)?;
+    println!(
+        "| scene | method | param | time ms | RMSE | max abs | coverage diff % | missed surface | samples/px | Pareto |"
+    );
+    println!("|---|---|---|---:|---:|---:|---:|---:|---:|:-:|");
+    for r in &rows {
+        println!(
+            "| {} | {} | {} | {:.1} | {:.2e} | {:.3} | {:.2} | {} | {:.2} | {} |",
+            r.scene,
+            r.family,
+            r.param,
+            r.time_ms,
+            r.rmse,
+            r.max_abs,
+            r.coverage_diff_pct,
+            r.missed_surface,
+            r.samples_mean,
+            if r.pareto { "*" } else { "" }
+        );
+    }
+    eprintln!(
+        "wrote {} and {}",
+        args.out.join("accuracy.csv").display(),
+        args.out.join("accuracy.png").display()
+    );
+    Ok(())
+}

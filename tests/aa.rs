@@ -1,0 +1,254 @@
+//! Anti-aliasing (IAA and grid) and the accuracy sweep, on example scenes
+//! evaluated by the reference interpreter.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use ibeam::eval::Evaluator;
+use ibeam::ir::interp::Interpreter;
+use ibeam::ir::passes::simplify;
+use ibeam::render::accuracy::{CSV_HEADER, default_variants, run_accuracy, sweep_scene};
+use ibeam::render::{Aa, Method, RenderOptions, RenderOutput, render_aa};
+use ibeam::scene::Scene;
+
+fn example(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples")
+        .join(format!("{name}.ib"))
+}
+
+fn interp(scene: &Scene) -> Result<Vec<Arc<dyn Evaluator>>, String> {
+    Ok(scene
+        .objects
+        .iter()
+        .map(|o| Arc::new(Interpreter::new(simplify(&o.function))) as Arc<dyn Evaluator>)
+        .collect())
+}
+
+fn load(name: &str) -> (Scene, Vec<Arc<dyn Evaluator>>) {
+    let scene = ibeam::lang::load_scene(&example(name)).unwrap();
+    let evals = interp(&scene).unwrap();
+    (scene, evals)
+}
+
+fn go(
+    scene: &Scene,
+    evals: &[Arc<dyn Evaluator>],
+    size: u32,
+    aa: Aa,
+    threads: usize,
+) -> RenderOutput {
+    let mut o = RenderOptions::new(size, size);
+    o.threads = Some(threads);
+    render_aa(scene, evals, &o, aa).unwrap()
+}
+
+// Pixels whose base hit differs from a 4-neighbour's: the silhouette.
+fn silhouette(hit: &[bool], w: usize, h: usize) -> Vec<bool> {
+    let mut out = vec![false; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let k = y * w + x;
+            let mut nb = Vec::new();
+            if x > 0 {
+                nb.push(k - 1);
+            }
+            if x + 1 < w {
+                nb.push(k + 1);
+            }
+            if y > 0 {
+                nb.push(k - w);
+            }
+            if y + 1 < h {
+                nb.push(k + w);
+            }
+            out[k] = nb.iter().any(|&n| hit[n] != hit[k]);
+        }
+    }
+    out
+}
+
+#[test]
+fn iaa_on_a_sphere_samples_the_interior_once_and_splits_the_silhouette() {
+    let (scene, evals) = load("sphere");
+    let n = 40usize;
+    let plain = go(&scene, &evals, n as u32, Aa::None, 1);
+    // The loosest threshold (every clamped colour interval passes): at
+    // this size one pixel spans a wide range of normals, and the point
+    // here is the geometric split rule.
+    let aa = Aa::Iaa {
+        threshold: 1.0,
+        depth: 2,
+    };
+    let out = go(&scene, &evals, n as u32, aa, 1);
+    let sil = silhouette(&plain.hit_mask, n, n);
+    // Where 4×4 samples see both surface and background, the silhouette
+    // crosses the pixel: neither the rejection nor the inclusion test can
+    // settle it.
+    let grid = go(&scene, &evals, n as u32, Aa::Grid(4), 1);
+    let mut crossed = 0;
+    let mut interior = 0;
+    for k in 0..n * n {
+        if grid.coverage[k] > 0.0 && grid.coverage[k] < 1.0 {
+            crossed += 1;
+            assert!(out.samples[k] > 1, "silhouette pixel {k} not split");
+            assert!(out.coverage[k] > 0.0 && out.coverage[k] < 1.0);
+        }
+        // Two pixels inside the silhouette, or far outside it.
+        let (x, y) = (k % n, k / n);
+        let near = (x.saturating_sub(2)..(x + 3).min(n))
+            .flat_map(|i| (y.saturating_sub(2)..(y + 3).min(n)).map(move |j| j * n + i))
+            .any(|m| sil[m]);
+        if !near && plain.hit_mask[k] {
+            interior += 1;
+            assert_eq!(out.samples[k], 1, "interior pixel {k} split");
+            assert_eq!(
+                out.image.as_raw()[3 * k..3 * k + 3],
+                plain.image.as_raw()[3 * k..3 * k + 3]
+            );
+        }
+        if !near && !plain.hit_mask[k] {
+            assert_eq!(out.samples[k], 1, "background pixel {k} split");
+            assert_eq!(out.coverage[k], 0.0);
+        }
+    }
+    assert!(interior > 100, "only {interior} interior pixels");
+    assert!(crossed > 40, "only {crossed} silhouette pixels");
+    assert_eq!(out.stats.aa_samples_max, 16);
+    assert_eq!(
+        out.stats.aa_pixels_split,
+        out.samples.iter().filter(|&&s| s > 1).count() as u64
+    );
+    let mean = out.samples.iter().map(|&s| f64::from(s)).sum::<f64>() / (n * n) as f64;
+    assert!((out.stats.aa_samples_mean() - mean).abs() < 1e-12);
+    // The tight default threshold splits more.
+    let tight = go(
+        &scene,
+        &evals,
+        n as u32,
+        Aa::Iaa {
+            threshold: 1.0 / 256.0,
+            depth: 2,
+        },
+        1,
+    );
+    assert!(tight.stats.aa_pixels_split > out.stats.aa_pixels_split);
+}
+
+#[test]
+fn grid_takes_n_squared_samples_everywhere() {
+    let (scene, evals) = load("sphere");
+    for nn in [2u32, 3] {
+        let out = go(&scene, &evals, 12, Aa::Grid(nn), 1);
+        assert!(out.samples.iter().all(|&s| s == nn * nn));
+        assert_eq!(out.stats.aa_samples_max, u64::from(nn * nn));
+        assert!((out.stats.aa_samples_mean() - f64::from(nn * nn)).abs() < 1e-12);
+        assert_eq!(out.stats.aa_pixels_split, 144);
+        // Coverage is a multiple of 1/N².
+        for &c in &out.coverage {
+            let q = c * f64::from(nn * nn);
+            assert!((q - q.round()).abs() < 1e-9, "{c}");
+        }
+    }
+    let plain = go(&scene, &evals, 12, Aa::Grid(1), 1);
+    let none = go(&scene, &evals, 12, Aa::None, 1);
+    assert_eq!(plain.image, none.image);
+    assert_eq!(none.stats.aa_pixels_split, 0);
+}
+
+#[test]
+fn anti_aliased_output_is_the_same_for_one_and_two_threads() {
+    let (scene, evals) = load("sphere");
+    for aa in [
+        Aa::Iaa {
+            threshold: 1.0 / 64.0,
+            depth: 2,
+        },
+        Aa::Grid(2),
+    ] {
+        // 40 pixels: more than one tile, so the threads share work.
+        let a = go(&scene, &evals, 40, aa, 1);
+        let b = go(&scene, &evals, 40, aa, 2);
+        assert_eq!(a.image, b.image, "{aa}");
+        assert_eq!(a.linear, b.linear);
+        assert_eq!(a.samples, b.samples);
+        assert_eq!(a.coverage, b.coverage);
+        assert_eq!(a.stats.rays, b.stats.rays);
+        assert_eq!(a.stats.interval_evals, b.stats.interval_evals);
+        assert_eq!(a.stats.aa_samples, b.stats.aa_samples);
+    }
+}
+
+#[test]
+fn iaa_never_loses_surface_on_a_thin_feature() {
+    let (scene, evals) = load("orthocircle_thin");
+    let n = 40;
+    let plain = go(&scene, &evals, n, Aa::None, 2);
+    let aa = go(
+        &scene,
+        &evals,
+        n,
+        Aa::Iaa {
+            threshold: 1.0 / 64.0,
+            depth: 2,
+        },
+        2,
+    );
+    let hits = plain.hit_mask.iter().filter(|&&h| h).count();
+    assert!(hits > 50, "{hits}");
+    for k in 0..plain.hit_mask.len() {
+        if plain.hit_mask[k] {
+            assert!(aa.coverage[k] > 0.0, "pixel {k} lost its surface");
+            assert!(aa.hit_mask[k]);
+        }
+    }
+}
+
+#[test]
+fn accuracy_sweep_writes_its_files_and_obeys_the_obvious_relations() {
+    let dir = std::env::temp_dir().join(format!("ibeam-aa-test-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let rows = run_accuracy(&[example("sphere")], &dir, 12, &interp).unwrap();
+    let csv = std::fs::read_to_string(dir.join("accuracy.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some(CSV_HEADER));
+    assert_eq!(lines.count(), rows.len());
+    assert_eq!(rows.len(), 1 + default_variants().len());
+    let png = image::open(dir.join("accuracy.png")).unwrap();
+    assert!(png.width() >= 400 && png.height() >= 300);
+    let reference = &rows[0];
+    assert_eq!(reference.family, "reference");
+    assert_eq!(reference.rmse, 0.0);
+    assert_eq!(reference.max_abs, 0.0);
+    assert_eq!(reference.coverage_diff_pct, 0.0);
+    assert_eq!(reference.missed_surface, 0);
+    assert_eq!(reference.samples_mean, 256.0);
+    for r in &rows[1..] {
+        assert!(r.rmse.is_finite() && r.rmse >= 0.0 && r.rmse <= r.max_abs + 1e-12);
+        assert!(r.time_ms > 0.0);
+        if r.family != "point" {
+            assert_eq!(r.missed_surface, 0, "{} {}", r.family, r.param);
+        }
+    }
+    assert!(rows[1..].iter().any(|r| r.pareto));
+    // The beam and pixel methods draw the same pixels (their colours
+    // differ within the depth tolerance).
+    let fam = |f: &str| rows.iter().find(|r| r.family == f).unwrap();
+    assert_eq!(
+        fam("beam").coverage_diff_pct,
+        fam("pixel").coverage_diff_pct
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn sweep_of_a_custom_variant_list_has_one_row_each() {
+    let (scene, evals) = load("sphere");
+    let v: Vec<_> = default_variants()
+        .into_iter()
+        .filter(|v| v.method == Method::Beam && v.aa == Aa::None)
+        .collect();
+    let rows = sweep_scene("sphere", &scene, &evals, 8, &v, 1).unwrap();
+    assert_eq!(rows.len(), 2);
+    assert!(rows[1].pareto);
+}
