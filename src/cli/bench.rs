@@ -26,6 +26,9 @@ pub enum What {
     /// Render times and rays traced: beam against per-pixel and point
     /// sampling, with shadows as the scene sets them.
     Render(RenderArgs),
+    /// Run time against error of every method and anti-aliasing mode, with
+    /// a CSV and a log-log plot.
+    Accuracy(super::accuracy::Args),
 }
 
 /// Arguments of `ibeam bench render`.
@@ -64,6 +67,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     match &args.what {
         What::Eval(a) => bench_eval(a),
         What::Render(a) => bench_render(a),
+        What::Accuracy(a) => super::accuracy::run(a),
     }
 }
 
