@@ -24,6 +24,16 @@ pub fn build_evaluators(
     scene: &crate::scene::Scene,
     kind: EvalKind,
 ) -> Result<Vec<std::sync::Arc<dyn crate::eval::Evaluator>>, CliError> {
-    let _ = (scene, kind);
-    Err("evaluators are not wired up yet".into())
+    match kind {
+        EvalKind::Interp => Ok(scene
+            .objects
+            .iter()
+            .map(|o| {
+                let f = crate::ir::passes::simplify(&o.function);
+                std::sync::Arc::new(crate::ir::interp::Interpreter::new(f))
+                    as std::sync::Arc<dyn crate::eval::Evaluator>
+            })
+            .collect()),
+        EvalKind::Jit => Err("the JIT evaluator is not built yet (use --eval interp)".into()),
+    }
 }
