@@ -10,10 +10,18 @@
 //! shrinks the piece or drops it, and a piece on which that object is
 //! proven monotone with proven opposite signs at its ends holds exactly one
 //! root, which is refined on the point evaluator (Illinois). A piece
-//! narrower than the depth tolerance on which 0 ∈ F counts as a hit even
-//! without a sign change: this is how tangential contacts and double roots
+//! narrower than the depth tolerance whose ends show a sign change is
+//! refined to its root. Without a sign change, a piece on which 0 ∈ F is
+//! bisected on until it is 64 times narrower than the tolerance, and then
+//! counts as a hit: this is how tangential contacts and double roots
 //! (f = g², which never changes sign) are drawn, at the cost of surfaces
-//! within about a tolerance of a ray being drawn as touched. A ray whose
+//! within about a 64th of a tolerance of a ray being drawn as touched. The
+//! extra depth matters twice: the interval extension of an ill-conditioned
+//! form (an expanded (x−1)^10) contains 0 on tolerance-wide pieces far from
+//! any surface, which the centred form proves empty only on much narrower
+//! pieces (its excess shrinks with the square of the width); and the beam
+//! method rejects whole blocks that pass within a tolerance of a surface,
+//! which single rays must then reject too for both methods to agree. A ray whose
 //! start point has f < 0 (point evaluation) hits at t0: cut-away views of
 //! solids clipped by the bounds, and filled masks for 2D functions.
 
@@ -26,10 +34,9 @@ use crate::render::stats::RenderStats;
 // one counts as a hit at the current piece (never a silent miss).
 const MAX_RAY_STEPS: usize = 20_000;
 const MAX_REFINE_STEPS: usize = 200;
-// How much narrower than the depth tolerance a piece the point values say
-// is far from any surface may be bisected before the tangency policy
-// applies (see `far_from_surface`).
-const DEEPER_SPLIT: f64 = 64.0;
+// How much narrower than the depth tolerance a piece without a sign change
+// must be before the tangency policy draws it (see the module doc).
+const TANGENT_SPLIT: f64 = 64.0;
 
 /// The smallest live-object value at `p` and the object attaining it.
 pub(crate) fn scene_point(
@@ -191,16 +198,11 @@ pub(crate) fn trace_ray(
         if steps >= MAX_RAY_STEPS {
             return Some(narrow_hit(tr, ray, live, a, b, st));
         }
-        // A narrow piece is a hit (tangency policy) unless the point
-        // values say the surface is far: then it is bisected further, down
-        // to DEEPER_SPLIT times narrower, before the policy applies.
-        if b - a <= tol
-            && (b - a <= tol / DEEPER_SPLIT
-                || sign_change(tr, ray, live, a, b, st)
-                || !cand
-                    .iter()
-                    .all(|&(k, _)| far_from_surface(tr, ray, k as usize, a, b, tol, st)))
-        {
+        // A narrow piece is a hit when its ends show a sign change (the
+        // root is refined); without one it is a tangency candidate, bisected
+        // on down to TANGENT_SPLIT times narrower before the tangency
+        // policy draws it (see the module doc).
+        if b - a <= tol && (b - a <= tol / TANGENT_SPLIT || sign_change(tr, ray, live, a, b, st)) {
             return Some(narrow_hit(tr, ray, live, a, b, st));
         }
         if cand.len() == 1 {
@@ -277,34 +279,6 @@ fn sign_change(
     fa > 0.0 && fb <= 0.0
 }
 
-// Whether object k's first-order distance estimate f/|∇f| at the middle of
-// a narrow piece puts the surface more than a depth tolerance (a quarter
-// pixel) from the ray. A narrow piece with 0 ∈ F and no sign change
-// is a tangency candidate, but the interval extension of an
-// ill-conditioned form (an expanded (x−1)^10) contains 0 on
-// tolerance-wide pieces far from any surface, and the tangency policy
-// would draw those as hits, fattening the shape by the reach of its
-// overestimation. Such pieces are bisected further instead (never
-// dropped: the estimate only buys bisection, so no root is lost); the
-// centred form, whose excess shrinks with the square of the width, then
-// proves them empty. For f = g^m the estimate is |g|/(m|∇g|), so true
-// double roots near the ray still take the policy at once.
-fn far_from_surface(
-    tr: &Tracer<'_>,
-    ray: &PixelRay,
-    k: usize,
-    a: f64,
-    b: f64,
-    tol: f64,
-    st: &mut RenderStats,
-) -> bool {
-    let g = tr.point_grad(k, ray.at(0.5 * (a + b)), st);
-    let grad = (g.d[0] * g.d[0] + g.d[1] * g.d[1] + g.d[2] * g.d[2]).sqrt();
-    let dlen = (ray.dm[0] * ray.dm[0] + ray.dm[1] * ray.dm[1] + ray.dm[2] * ray.dm[2]).sqrt();
-    let reach = tol.max(b - a) * dlen;
-    g.v.is_finite() && grad.is_finite() && g.v > 0.0 && g.v > grad * reach
-}
-
 // A narrow piece with 0 ∈ F: refine a sign change if the ends show one,
 // else the front of the piece is the hit (tangency policy).
 fn narrow_hit(
@@ -360,15 +334,26 @@ fn newton(
     }
     let n = Interval::point(m).sub(fm.div(dfdt));
     let (na, nb) = (a.max(n.lo), b.min(n.hi));
+    // Newton keeps the roots of the piece, but a ray can also enter the
+    // solid without a root, through the edge of f's domain (undefined
+    // before it, negative after: sqrt or pow inside a max that takes
+    // another branch, whose gradient stays bounded). Where f is proven
+    // negative at the midpoint, the piece holds solid that may have no root
+    // in front of it, so it is bisected instead of narrowed, and the
+    // tangency policy draws its first narrow piece that keeps 0 ∈ F.
+    if fm.hi < 0.0 {
+        return Newton::Shrunk(a, b);
+    }
     if na.partial_cmp(&nb).is_none_or(|o| o.is_gt()) {
         return Newton::Empty;
     }
     let fa = tr.interval(k, ray_box(ray.o, ray.d, Interval::point(na)), st);
     let fb = tr.interval(k, ray_box(ray.o, ray.d, Interval::point(nb)), st);
-    if fa.lo > 0.0 && fb.lo > 0.0 || fa.hi < 0.0 && fb.hi < 0.0 {
-        // Monotone with one strict sign at both ends: no root. (A negative
-        // start cannot follow rejected pieces except at the ray start,
-        // which `starts_inside` handled.)
+    if fa.hi < 0.0 && fb.hi < 0.0 {
+        return Newton::Shrunk(a, b);
+    }
+    if fa.lo > 0.0 && fb.lo > 0.0 {
+        // Monotone and positive at both ends: no root and no hit.
         return Newton::Empty;
     }
     if fa.lo > 0.0 && fb.hi < 0.0 {
