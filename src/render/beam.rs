@@ -310,7 +310,8 @@ fn all_start_inside(
             let k = tile.idx(i, j);
             if let Some((pt0, _)) = tile.slabs[k] {
                 let (v, obj) = scene_point(tr, live, tile.rays[k].at(pt0), st);
-                if !(v < 0.0) {
+                // NaN (undefined) is not inside.
+                if v.is_nan() || v >= 0.0 {
                     return false;
                 }
                 starts.push((k, pt0, obj));
