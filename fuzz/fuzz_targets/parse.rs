@@ -17,5 +17,10 @@ fuzz_target!(|data: &[u8]| {
             );
         }
     }
-    let _ = ibeam::lang::function_from_formula(&text);
+    if let Err(e) = ibeam::lang::function_from_formula(&text) {
+        assert!(
+            !e.message.contains("internal error"),
+            "formula: loader panicked on {text:?}: {e}"
+        );
+    }
 });
