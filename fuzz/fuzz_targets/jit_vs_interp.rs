@@ -112,7 +112,10 @@ fuzz_target!(|data: &[u8]| {
                 continue;
             }
             for v in [interp.point(pt), jit.point(pt)] {
-                assert!(fi.contains(v), "interval {fi:?} over {bx:?} misses {v} at {pt:?}");
+                assert!(
+                    fi.contains(v),
+                    "interval {fi:?} over {bx:?} misses {v} at {pt:?}"
+                );
                 assert!(
                     gi.v.contains(v),
                     "interval-gradient value {:?} over {bx:?} misses {v} at {pt:?}",
