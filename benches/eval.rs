@@ -51,10 +51,18 @@ fn bench_scene(c: &mut Criterion, name: &str, path: &str) {
     let evals: [(&str, &dyn Evaluator); 2] = [("interp", &interp), ("jit", &jit)];
     for (label, e) in evals {
         g.bench_function(format!("point/{label}"), |b| {
-            b.iter(|| points.iter().for_each(|p| drop(black_box(e.point(*p)))))
+            b.iter(|| {
+                points.iter().for_each(|p| {
+                    black_box(e.point(*p));
+                })
+            })
         });
         g.bench_function(format!("interval/{label}"), |b| {
-            b.iter(|| boxes.iter().for_each(|x| drop(black_box(e.interval(*x)))))
+            b.iter(|| {
+                boxes.iter().for_each(|x| {
+                    black_box(e.interval(*x));
+                })
+            })
         });
     }
     g.bench_function("point_batch/jit", |b| {

@@ -354,6 +354,26 @@ pub fn igrad_binary(op: BinaryOp, a: IntervalGrad, b: IntervalGrad) -> IntervalG
             }
         }
         BinaryOp::Atan2 => {
+            // atan2(a, b) jumps by 2π across its branch cut (a = 0, b < 0).
+            // A box touching the cut (the same test as the value's) has no
+            // finite bound on how fast f changes: the derivative formula
+            // below would miss the jump, and interval Newton, the centred
+            // form and the inclusion test would then drop or misplace the
+            // sign change there. Every direction that moves a or b gets the
+            // whole line.
+            if b.v.lo <= 0.0 && a.v.lo <= 0.0 && 0.0 <= a.v.hi {
+                let zero = |x: Interval| x.lo == 0.0 && x.hi == 0.0;
+                return IntervalGrad {
+                    v,
+                    d: d(&|i| {
+                        if zero(a.d[i]) && zero(b.d[i]) {
+                            Interval::point(0.0)
+                        } else {
+                            Interval::ENTIRE
+                        }
+                    }),
+                };
+            }
             let r2 = a.v.square().add(b.v.square());
             IntervalGrad {
                 v,

@@ -300,19 +300,37 @@ fn all_start_inside(
     if inside_obj.is_none() {
         return false;
     }
+    // F < 0 over the hull says only that f < 0 wherever it is defined
+    // there (partial domains): a start point where f is undefined is not
+    // inside. The single-ray start test is a point test, so each start is
+    // confirmed the same way, keeping both methods' pixels identical.
+    let mut starts = Vec::new();
+    for j in b.y0..b.y1 {
+        for i in b.x0..b.x1 {
+            let k = tile.idx(i, j);
+            if let Some((pt0, _)) = tile.slabs[k] {
+                let (v, obj) = scene_point(tr, live, tile.rays[k].at(pt0), st);
+                // NaN (undefined) is not inside.
+                if v.is_nan() || v >= 0.0 {
+                    return false;
+                }
+                starts.push((k, pt0, obj));
+            }
+        }
+    }
     for j in b.y0..b.y1 {
         for i in b.x0..b.x1 {
             let k = tile.idx(i, j);
             tile.class[k] = Class::Included;
-            tile.hits[k] = tile.slabs[k].map(|(pt0, _)| {
-                let p = tile.rays[k].at(pt0);
-                Hit {
-                    t: pt0,
-                    obj: scene_point(tr, live, p, st).1,
-                    inside: true,
-                }
-            });
+            tile.hits[k] = None;
         }
+    }
+    for (k, t, obj) in starts {
+        tile.hits[k] = Some(Hit {
+            t,
+            obj,
+            inside: true,
+        });
     }
     true
 }
@@ -337,7 +355,15 @@ fn include_block(
                 continue;
             };
             st.pixels_refined += 1;
-            let hit = refine(tr, &ray, live, ta, tb, st);
+            // The bracket is clipped to the pixel's own range first: a root
+            // just past the pixel's clip end (within the refinement
+            // tolerance) would otherwise be refined to a point inside it.
+            let (ca, cb) = (ta.max(pt0), tb.min(pt1));
+            let hit = if ca < cb {
+                refine(tr, &ray, live, ca, cb, st)
+            } else {
+                None
+            };
             tile.hits[k] = match hit {
                 Some(h) if h.t >= pt0 && h.t <= pt1 => Some(h),
                 // The root lies outside this pixel's own clip range (only

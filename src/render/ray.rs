@@ -10,10 +10,18 @@
 //! shrinks the piece or drops it, and a piece on which that object is
 //! proven monotone with proven opposite signs at its ends holds exactly one
 //! root, which is refined on the point evaluator (Illinois). A piece
-//! narrower than the depth tolerance on which 0 ∈ F counts as a hit even
-//! without a sign change: this is how tangential contacts and double roots
+//! narrower than the depth tolerance whose ends show a sign change is
+//! refined to its root. Without a sign change, a piece on which 0 ∈ F is
+//! bisected on until it is 64 times narrower than the tolerance, and then
+//! counts as a hit: this is how tangential contacts and double roots
 //! (f = g², which never changes sign) are drawn, at the cost of surfaces
-//! within about a tolerance of a ray being drawn as touched. A ray whose
+//! within about a 64th of a tolerance of a ray being drawn as touched. The
+//! extra depth matters twice: the interval extension of an ill-conditioned
+//! form (an expanded (x−1)^10) contains 0 on tolerance-wide pieces far from
+//! any surface, which the centred form proves empty only on much narrower
+//! pieces (its excess shrinks with the square of the width); and the beam
+//! method rejects whole blocks that pass within a tolerance of a surface,
+//! which single rays must then reject too for both methods to agree. A ray whose
 //! start point has f < 0 (point evaluation) hits at t0: cut-away views of
 //! solids clipped by the bounds, and filled masks for 2D functions.
 
@@ -26,6 +34,9 @@ use crate::render::stats::RenderStats;
 // one counts as a hit at the current piece (never a silent miss).
 const MAX_RAY_STEPS: usize = 20_000;
 const MAX_REFINE_STEPS: usize = 200;
+// How much narrower than the depth tolerance a piece without a sign change
+// must be before the tangency policy draws it (see the module doc).
+const TANGENT_SPLIT: f64 = 64.0;
 
 /// The smallest live-object value at `p` and the object attaining it.
 pub(crate) fn scene_point(
@@ -184,7 +195,14 @@ pub(crate) fn trace_ray(
             continue;
         }
         let tol = tr.cam.tolerance(a);
-        if b - a <= tol || steps >= MAX_RAY_STEPS {
+        if steps >= MAX_RAY_STEPS {
+            return Some(narrow_hit(tr, ray, live, a, b, st));
+        }
+        // A narrow piece is a hit when its ends show a sign change (the
+        // root is refined); without one it is a tangency candidate, bisected
+        // on down to TANGENT_SPLIT times narrower before the tangency
+        // policy draws it (see the module doc).
+        if b - a <= tol && (b - a <= tol / TANGENT_SPLIT || sign_change(tr, ray, live, a, b, st)) {
             return Some(narrow_hit(tr, ray, live, a, b, st));
         }
         if cand.len() == 1 {
@@ -246,6 +264,21 @@ fn centred_positive(
     fm.add(dfdt.mul(off)).lo > 0.0
 }
 
+// Whether the scene function's point values show a sign change over
+// [a, b] (positive at a, not positive at b): then a root is there.
+fn sign_change(
+    tr: &Tracer<'_>,
+    ray: &PixelRay,
+    live: &[u32],
+    a: f64,
+    b: f64,
+    st: &mut RenderStats,
+) -> bool {
+    let fa = scene_point(tr, live, ray.at(a), st).0;
+    let fb = scene_point(tr, live, ray.at(b), st).0;
+    fa > 0.0 && fb <= 0.0
+}
+
 // A narrow piece with 0 ∈ F: refine a sign change if the ends show one,
 // else the front of the piece is the hit (tangency policy).
 fn narrow_hit(
@@ -301,15 +334,26 @@ fn newton(
     }
     let n = Interval::point(m).sub(fm.div(dfdt));
     let (na, nb) = (a.max(n.lo), b.min(n.hi));
+    // Newton keeps the roots of the piece, but a ray can also enter the
+    // solid without a root, through the edge of f's domain (undefined
+    // before it, negative after: sqrt or pow inside a max that takes
+    // another branch, whose gradient stays bounded). Where f is proven
+    // negative at the midpoint, the piece holds solid that may have no root
+    // in front of it, so it is bisected instead of narrowed, and the
+    // tangency policy draws its first narrow piece that keeps 0 ∈ F.
+    if fm.hi < 0.0 {
+        return Newton::Shrunk(a, b);
+    }
     if na.partial_cmp(&nb).is_none_or(|o| o.is_gt()) {
         return Newton::Empty;
     }
     let fa = tr.interval(k, ray_box(ray.o, ray.d, Interval::point(na)), st);
     let fb = tr.interval(k, ray_box(ray.o, ray.d, Interval::point(nb)), st);
-    if fa.lo > 0.0 && fb.lo > 0.0 || fa.hi < 0.0 && fb.hi < 0.0 {
-        // Monotone with one strict sign at both ends: no root. (A negative
-        // start cannot follow rejected pieces except at the ray start,
-        // which `starts_inside` handled.)
+    if fa.hi < 0.0 && fb.hi < 0.0 {
+        return Newton::Shrunk(a, b);
+    }
+    if fa.lo > 0.0 && fb.lo > 0.0 {
+        // Monotone and positive at both ends: no root and no hit.
         return Newton::Empty;
     }
     if fa.lo > 0.0 && fb.hi < 0.0 {

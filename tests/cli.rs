@@ -1,0 +1,201 @@
+//! End-to-end tests of the `ibeam` binary: `ibeam render` on the examples
+//! writes PNGs, and every load or argument error exits with a message on
+//! stderr and a non-zero code, never a panic (exit code 101).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// The evaluator flag every render here uses (one place, so the JIT
+/// variants can be added beside it).
+const EVAL: &str = "interp";
+
+/// A scratch directory of its own for each test.
+fn scratch(test: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("ibeam-cli-{}-{test}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn example(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples")
+        .join(name)
+}
+
+fn ibeam(args: &[&str]) -> Output {
+    let out = Command::new(env!("CARGO_BIN_EXE_ibeam"))
+        .args(args)
+        .output()
+        .expect("run ibeam");
+    assert_ne!(
+        out.status.code(),
+        Some(101),
+        "ibeam {args:?} panicked:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Renders `scene` to `out` with the usual test flags plus `extra`.
+fn render(scene: &Path, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--eval",
+        EVAL,
+        "--quiet",
+    ];
+    args.extend_from_slice(extra);
+    ibeam(&args)
+}
+
+/// Asserts a failed run: exit code 1 and every `needle` on stderr.
+fn assert_fails(o: &Output, needles: &[&str]) {
+    let err = stderr(o);
+    assert_eq!(o.status.code(), Some(1), "stderr:\n{err}");
+    for n in needles {
+        assert!(err.contains(n), "`{n}` not in stderr:\n{err}");
+    }
+}
+
+#[test]
+fn renders_examples_to_png() {
+    let dir = scratch("examples");
+    for (name, size) in [
+        ("sphere.ib", "24x24"),
+        ("csg.ib", "32x24"),
+        ("torus.ib", "24x20"),
+        ("double_sphere.ib", "24x24"),
+    ] {
+        let png = dir.join(name.replace(".ib", ".png"));
+        let o = render(&example(name), &png, &["--size", size]);
+        assert_eq!(o.status.code(), Some(0), "{name}: {}", stderr(&o));
+        let img = image::open(&png).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let (w, h) = size.split_once('x').unwrap();
+        assert_eq!(
+            (img.width(), img.height()),
+            (w.parse().unwrap(), h.parse().unwrap())
+        );
+        // Something was drawn: not every pixel is the background.
+        let rgb = img.to_rgb8();
+        let first = *rgb.get_pixel(0, 0);
+        assert!(rgb.pixels().any(|p| *p != first), "{name}: blank image");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn auxiliary_outputs_and_stats() {
+    let dir = scratch("aux");
+    let (png, depth, stats) = (dir.join("a.png"), dir.join("d.png"), dir.join("s.json"));
+    let o = render(
+        &example("sphere.ib"),
+        &png,
+        &[
+            "--size",
+            "24x24",
+            "--depth",
+            depth.to_str().unwrap(),
+            "--stats-json",
+            stats.to_str().unwrap(),
+            "--method",
+            "pixel",
+            "--threads",
+            "1",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(image::open(&depth).unwrap().width(), 24);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert!(json.is_object());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn syntax_error_points_at_file_line_and_column() {
+    let dir = scratch("syntax");
+    let scene = dir.join("bad.ib");
+    std::fs::write(&scene, "// a comment\nobject s = x^2 + * y;\n").unwrap();
+    let o = render(&scene, &dir.join("x.png"), &["--size", "8x8"]);
+    let loc = format!("{}:2:", scene.display());
+    assert_fails(&o, &[&loc, "error", "^"]);
+    // Nothing is left behind when the render fails.
+    assert!(!dir.join("x.png").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn unknown_name_suggests_the_closest() {
+    let dir = scratch("unknown");
+    let scene = dir.join("typo.ib");
+    std::fs::write(&scene, "object ball = sphre(1);\n").unwrap();
+    let o = render(&scene, &dir.join("x.png"), &["--size", "8x8"]);
+    let loc = format!("{}:1:15", scene.display());
+    assert_fails(&o, &[&loc, "sphre", "did you mean `sphere`"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn missing_scene_file() {
+    let dir = scratch("missing");
+    let o = render(
+        &dir.join("no-such-scene.ib"),
+        &dir.join("x.png"),
+        &["--size", "8x8"],
+    );
+    assert_fails(&o, &["cannot read", "no-such-scene.ib"]);
+    assert!(!dir.join("x.png").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn unwritable_output_path() {
+    let o = render(
+        &example("sphere.ib"),
+        Path::new("/nonexistent/dir/x.png"),
+        &["--size", "8x8"],
+    );
+    assert_fails(&o, &["cannot write", "/nonexistent/dir/x.png"]);
+}
+
+#[test]
+fn bad_sizes_are_usage_errors() {
+    let dir = scratch("sizes");
+    for size in ["0x0", "20000x10", "10", "axb"] {
+        let o = render(&example("sphere.ib"), &dir.join("x.png"), &["--size", size]);
+        let err = stderr(&o);
+        // clap's usage errors exit with 2.
+        assert_eq!(o.status.code(), Some(2), "{size}: {err}");
+        assert!(err.contains("--size"), "{size}: {err}");
+        assert!(!dir.join("x.png").exists());
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn scene_without_objects() {
+    let dir = scratch("empty");
+    let scene = dir.join("empty.ib");
+    std::fs::write(&scene, "camera { eye = (0, 0, 5); }\n").unwrap();
+    let o = render(&scene, &dir.join("x.png"), &["--size", "8x8"]);
+    assert_fails(&o, &["no object"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn vm_model_with_errors_reports_its_line() {
+    let dir = scratch("vm");
+    let scene = dir.join("bad.vm");
+    std::fs::write(&scene, "_0 var-x\n_1 frobnicate _0\n").unwrap();
+    let o = render(&scene, &dir.join("x.png"), &["--size", "8x8"]);
+    let loc = format!("{}:2:", scene.display());
+    assert_fails(&o, &[&loc, "frobnicate"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
