@@ -19,13 +19,27 @@ use ibeam::interval::Interval;
 use ibeam::ir::interp::Interpreter;
 use ibeam::ir::passes;
 use ibeam::ir::random::Rng;
+use ibeam::jit::JitEvaluator;
 use ibeam::render::{Method, RenderOptions, render};
 use ibeam::scene::Scene;
 use proptest::prelude::*;
 
-/// The evaluators every render in this file uses (one place, so the JIT
-/// can replace the interpreter).
+/// The evaluators every render in this file uses: the JIT, as the CLI
+/// uses by default.
 fn evaluators(scene: &Scene) -> Vec<Arc<dyn Evaluator>> {
+    scene
+        .objects
+        .iter()
+        .map(|o| {
+            let f = passes::simplify(&o.function);
+            Arc::new(JitEvaluator::new(&f).expect("JIT accepts valid IR")) as Arc<dyn Evaluator>
+        })
+        .collect()
+}
+
+/// The reference interpreter over the same simplified functions.
+#[allow(dead_code)]
+fn interp_evaluators(scene: &Scene) -> Vec<Arc<dyn Evaluator>> {
     scene
         .objects
         .iter()
@@ -194,6 +208,7 @@ fn check_scene(seed: u64, text: &str, all_csg: bool, n: usize) {
     };
     assert_eq!(scene.objects.len(), n);
     check_simplify(seed, &scene);
+    check_jit_matches_interp(seed, &scene);
     let evals = evaluators(&scene);
     let mut opts = RenderOptions::new(32, 32);
     let beam = render(&scene, &evals, &opts).unwrap();
@@ -256,6 +271,39 @@ fn check_simplify(seed: u64, scene: &Scene) {
                 "seed {seed}: {} at {p:?}: {a} {ia:?} before, {b} {ib:?} after",
                 o.name
             );
+        }
+    }
+}
+
+/// The JIT against the interpreter on the scene's simplified functions:
+/// point values bit for bit (NaN equal to NaN), and JIT intervals over
+/// random boxes that contain the interpreter's values at sampled points.
+fn check_jit_matches_interp(seed: u64, scene: &Scene) {
+    let mut rng = Rng::new(seed ^ 0x5eed);
+    for (jit, interp) in evaluators(scene).iter().zip(interp_evaluators(scene)) {
+        for _ in 0..64 {
+            let p: [f64; 3] = std::array::from_fn(|_| rng.range(-2.0, 2.0));
+            let (j, i) = (jit.point(p), interp.point(p));
+            assert!(
+                j.to_bits() == i.to_bits() || (j.is_nan() && i.is_nan()),
+                "seed {seed}: JIT {j} vs interpreter {i} at {p:?}"
+            );
+            let half: [f64; 3] = std::array::from_fn(|_| rng.range(0.0, 0.5));
+            let b: [Interval; 3] =
+                std::array::from_fn(|k| Interval::new(p[k] - half[k], p[k] + half[k]));
+            let (jb, ib) = (jit.interval(b), interp.interval(b));
+            assert!(
+                jb == ib || (jb.is_empty() && ib.is_empty()),
+                "seed {seed}: JIT {jb:?} vs interpreter {ib:?} on {b:?}"
+            );
+            for _ in 0..4 {
+                let q: [f64; 3] = std::array::from_fn(|k| rng.range(b[k].lo, b[k].hi));
+                let v = interp.point(q);
+                assert!(
+                    v.is_nan() || !v.is_finite() || jb.contains(v),
+                    "seed {seed}: {v} at {q:?} outside JIT {jb:?}"
+                );
+            }
         }
     }
 }

@@ -306,6 +306,9 @@ pub(crate) trait Num: Copy {
     fn min_grad(e: &mut Emitter, a: Self, b: Self, da: Self, db: Self) -> Self;
     /// Derivative of max(a, b): `da` where a > b, else `db`.
     fn max_grad(e: &mut Emitter, a: Self, b: Self, da: Self, db: Self) -> Self;
+    /// A partial `d` of atan2(a, b), widened where the box touches the
+    /// branch cut (a = 0, b ≤ 0) across which atan2 jumps by 2π.
+    fn atan2_cut(e: &mut Emitter, a: Self, b: Self, d: Self) -> Self;
 }
 
 impl Num for Value {
@@ -349,6 +352,12 @@ impl Num for Value {
     fn max_grad(e: &mut Emitter, a: Self, b: Self, da: Self, db: Self) -> Self {
         let gt = e.fcmp(FloatCC::GreaterThan, a, b);
         e.select(gt, da, db)
+    }
+    /// At a point the derivative formula holds off the cut, and the cut
+    /// itself is a measure-zero set the point evaluators do not special-case
+    /// (as `ir::interp::grad_binary`).
+    fn atan2_cut(_: &mut Emitter, _: Self, _: Self, d: Self) -> Self {
+        d
     }
 }
 
@@ -401,6 +410,24 @@ impl Num for Iv {
         let b_first = e.fcmp(FloatCC::LessThanOrEqual, a.hi, b.lo);
         let both = e.iv_hull(da, db);
         pick(e, a_first, da, b_first, db, both)
+    }
+    /// As `ir::interp::igrad_binary`: a box with `b.lo <= 0` and
+    /// `0 ∈ a` touches the cut, where no finite bound on the rate of change
+    /// exists, so the partial is the whole line. (Partials known to be
+    /// exactly zero never reach here: they stay zero, as in the reference.)
+    fn atan2_cut(e: &mut Emitter, a: Self, b: Self, d: Self) -> Self {
+        let z = e.c(0.0);
+        let b_nonpos = e.fcmp(FloatCC::LessThanOrEqual, b.lo, z);
+        let a_lo = e.fcmp(FloatCC::LessThanOrEqual, a.lo, z);
+        let a_hi = e.fcmp(FloatCC::LessThanOrEqual, z, a.hi);
+        let a_has0 = e.b.ins().band(a_lo, a_hi);
+        let cut = e.b.ins().band(b_nonpos, a_has0);
+        let ninf = e.c(f64::NEG_INFINITY);
+        let pinf = e.c(f64::INFINITY);
+        Iv {
+            lo: e.select(cut, ninf, d.lo),
+            hi: e.select(cut, pinf, d.hi),
+        }
     }
 }
 
@@ -581,7 +608,8 @@ fn binary_partial<T: Num>(
             let a2 = T::unary(e, UnaryOp::Square, a);
             let b2 = T::unary(e, UnaryOp::Square, b);
             let r2 = T::add(e, a2, b2);
-            T::div(e, n, r2)
+            let q = T::div(e, n, r2);
+            T::atan2_cut(e, a, b, q)
         }
         // a^b = exp(b ln a): v · (db·ln a + b·da/a)
         BinaryOp::Pow => {
