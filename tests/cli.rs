@@ -199,3 +199,48 @@ fn vm_model_with_errors_reports_its_line() {
     assert_fails(&o, &[&loc, "frobnicate"]);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The default evaluator (the JIT) and `--eval interp` draw the same
+/// pixels: point and interval values agree bit for bit; only gradient
+/// rounding may differ, which moves a shaded colour by at most a step.
+#[test]
+fn jit_and_interp_renders_agree() {
+    let dir = scratch("jit-vs-interp");
+    for name in ["csg.ib", "orthocircle_thin.ib"] {
+        let mut stats = Vec::new();
+        let mut images = Vec::new();
+        for eval in ["jit", "interp"] {
+            let png = dir.join(format!("{name}-{eval}.png"));
+            let json = dir.join(format!("{name}-{eval}.json"));
+            let o = ibeam(&[
+                "render",
+                example(name).to_str().unwrap(),
+                "-o",
+                png.to_str().unwrap(),
+                "--size",
+                "48x40",
+                "--eval",
+                eval,
+                "--quiet",
+                "--stats-json",
+                json.to_str().unwrap(),
+            ]);
+            assert!(o.status.success(), "{name} {eval}: {}", stderr(&o));
+            let v: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+            stats.push(v["pixels_hit"].as_u64().unwrap());
+            images.push(image::open(&png).unwrap().to_rgb8());
+        }
+        assert_eq!(stats[0], stats[1], "{name}: pixels hit");
+        assert!(stats[0] > 0, "{name}: something is drawn");
+        let worst = images[0]
+            .as_raw()
+            .iter()
+            .zip(images[1].as_raw())
+            .map(|(a, b)| a.abs_diff(*b))
+            .max()
+            .unwrap();
+        assert!(worst <= 2, "{name}: colours differ by {worst}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
