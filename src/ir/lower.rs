@@ -19,7 +19,7 @@
 
 use super::interp::{point_binary, point_powi, point_unary};
 use super::{BinaryOp, Builder, Function, Op, UnaryOp, ValueId, Var};
-use crate::lang::ast::{AddOp, Expr, ExprKind, Ident, Item, MulOp};
+use crate::lang::ast::{AddOp, Expr, ExprKind, Ident, Item, MulOp, Span};
 use crate::lang::diag::Diag;
 use std::collections::HashMap;
 use std::rc::Rc;
@@ -389,6 +389,27 @@ impl<'p, 'a> Lowerer<'p, 'a> {
         }
     }
 
+    /// A flat chain `t0 op1 t1 op2 t2 …` (n-ary sums and products, kept
+    /// flat by the parser so a million terms never nest), folded left.
+    fn lower_chain(
+        &mut self,
+        terms: impl Iterator<Item = (BinaryOp, &'a Expr)>,
+        span: Span,
+        what: &str,
+        ctx: &Ctx<'a>,
+        env: Env,
+    ) -> Result<Val, Diag> {
+        let mut acc: Option<Val> = None;
+        for (op, t) in terms {
+            let v = self.lower(t, ctx, env)?;
+            acc = Some(match acc {
+                None => v,
+                Some(a) => self.binary(op, a, v, ctx, (span.0, t.span.1))?,
+            });
+        }
+        acc.ok_or_else(|| ctx.diag(span, format!("empty {what}")))
+    }
+
     fn lower(&mut self, e: &'a Expr, ctx: &Ctx<'a>, env: Env) -> Result<Val, Diag> {
         if self.recursion >= MAX_RECURSION {
             return Err(ctx
@@ -441,38 +462,24 @@ impl<'p, 'a> Lowerer<'p, 'a> {
                 }
             }
             ExprKind::Sum(terms) => {
-                let mut acc: Option<Val> = None;
-                for (op, t) in terms {
-                    let v = self.lower(t, ctx, env)?;
-                    acc = Some(match acc {
-                        None => v,
-                        Some(a) => {
-                            let op = match op {
-                                AddOp::Add => BinaryOp::Add,
-                                AddOp::Sub => BinaryOp::Sub,
-                            };
-                            self.binary(op, a, v, ctx, (e.span.0, t.span.1))?
-                        }
-                    });
-                }
-                acc.ok_or_else(|| ctx.diag(e.span, "empty sum".into()))
+                let terms = terms.iter().map(|(op, t)| {
+                    let op = match op {
+                        AddOp::Add => BinaryOp::Add,
+                        AddOp::Sub => BinaryOp::Sub,
+                    };
+                    (op, t)
+                });
+                self.lower_chain(terms, e.span, "sum", ctx, env)
             }
             ExprKind::Product(terms) => {
-                let mut acc: Option<Val> = None;
-                for (op, t) in terms {
-                    let v = self.lower(t, ctx, env)?;
-                    acc = Some(match acc {
-                        None => v,
-                        Some(a) => {
-                            let op = match op {
-                                MulOp::Mul => BinaryOp::Mul,
-                                MulOp::Div => BinaryOp::Div,
-                            };
-                            self.binary(op, a, v, ctx, (e.span.0, t.span.1))?
-                        }
-                    });
-                }
-                acc.ok_or_else(|| ctx.diag(e.span, "empty product".into()))
+                let terms = terms.iter().map(|(op, t)| {
+                    let op = match op {
+                        MulOp::Mul => BinaryOp::Mul,
+                        MulOp::Div => BinaryOp::Div,
+                    };
+                    (op, t)
+                });
+                self.lower_chain(terms, e.span, "product", ctx, env)
             }
             ExprKind::Call {
                 name,

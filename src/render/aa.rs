@@ -63,9 +63,6 @@ pub const MAX_GRID: u32 = 32;
 // Bisections of an included bracket before the colour test.
 const NARROW_STEPS: usize = 6;
 
-// Rejection pieces per cell sweep before the cell is declared split.
-const MAX_SWEEP_PIECES: usize = 256;
-
 /// An anti-aliasing mode.
 #[derive(Copy, Clone, Debug, PartialEq, Default)]
 pub enum Aa {
@@ -349,25 +346,9 @@ impl Ctx<'_, '_> {
                 by_shading: false,
             };
         }
-        let mut stack = vec![(t0, t1)];
-        let mut pieces = 0usize;
-        let mut found = None;
-        while let Some((a, c)) = stack.pop() {
-            pieces += 1;
-            let Some(f) = eval_min(Interval::new(a, c), st) else {
-                continue;
-            };
-            if f.lo > 0.0 {
-                continue;
-            }
-            if c - a <= min_w(a) || pieces >= MAX_SWEEP_PIECES {
-                found = Some((a, c));
-                break;
-            }
-            let m = 0.5 * (a + c);
-            stack.push((m, c));
-            stack.push((a, m));
-        }
+        let found = super::beam::first_candidate(t0, t1, min_w, |t| {
+            eval_min(t, st).is_none_or(|f| f.lo > 0.0)
+        });
         let Some((ta, tb)) = found else {
             return Decision {
                 cell: Cell::Background,

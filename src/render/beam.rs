@@ -29,8 +29,36 @@ use super::{Class, Hit, Tracer};
 use crate::interval::Interval;
 use crate::render::stats::RenderStats;
 
-// Rejection pieces per block sweep before the block is declared undecided.
+// Rejection pieces per sweep before the block is declared undecided.
 const MAX_SWEEP_PIECES: usize = 256;
+
+/// The front-to-back rejection sweep of a beam over `[t0, t1]`, shared by
+/// the tracer and anti-aliasing: bisects nearest half first, drops every
+/// piece `excluded` proves free of surface, and returns the first piece it
+/// cannot drop once that piece is narrower than `min_w(start)` (or after
+/// [`MAX_SWEEP_PIECES`] pieces); `None` when the whole range is dropped.
+pub(crate) fn first_candidate(
+    t0: f64,
+    t1: f64,
+    min_w: impl Fn(f64) -> f64,
+    mut excluded: impl FnMut(Interval) -> bool,
+) -> Option<(f64, f64)> {
+    let mut stack = vec![(t0, t1)];
+    let mut pieces = 0usize;
+    while let Some((a, c)) = stack.pop() {
+        pieces += 1;
+        if excluded(Interval::new(a, c)) {
+            continue;
+        }
+        if c - a <= min_w(a) || pieces >= MAX_SWEEP_PIECES {
+            return Some((a, c));
+        }
+        let m = 0.5 * (a + c);
+        stack.push((m, c));
+        stack.push((a, m));
+    }
+    None
+}
 
 /// The per-pixel data of one tile.
 pub(crate) struct TileRays {
@@ -155,23 +183,7 @@ fn block(
         return;
     }
     // Front-to-back rejection sweep.
-    let mut stack = vec![(t0, t1)];
-    let mut pieces = 0usize;
-    let mut found: Option<(f64, f64)> = None;
-    while let Some((a, c)) = stack.pop() {
-        pieces += 1;
-        let f = eval_min(Interval::new(a, c), st);
-        if f.lo > 0.0 {
-            continue;
-        }
-        if c - a <= min_w(a) || pieces >= MAX_SWEEP_PIECES {
-            found = Some((a, c));
-            break;
-        }
-        let m = 0.5 * (a + c);
-        stack.push((m, c));
-        stack.push((a, m));
-    }
+    let found = first_candidate(t0, t1, min_w, |t| eval_min(t, st).lo > 0.0);
     let Some((ta, tb)) = found else {
         st.blocks_rejected += 1;
         set_block(tile, b, Class::Background);
