@@ -214,3 +214,20 @@ fn load_errors_have_position_and_caret() {
     assert!(stderr(&o).contains("no/such/file.ib"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The scene shown in the README loads and has one object.
+#[test]
+fn readme_scene_loads() {
+    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md"))
+        .expect("README.md is readable");
+    let start = readme
+        .find("A scene:\n\n```\n")
+        .expect("README shows a scene")
+        + 14;
+    let len = readme[start..].find("```").expect("the scene block ends");
+    let scene = ibeam::lang::load_scene_source("README.md", &readme[start..start + len])
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scene.objects.len(), 1);
+    assert_eq!(scene.lights.len(), 1);
+    assert!(scene.lights[0].shadows);
+}
