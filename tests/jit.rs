@@ -899,52 +899,21 @@ fn print_compile_times() {
     }
 }
 
-/// Minimal reader of Fidget's `.vm` text format, for timing on the real
-/// prospero model (the crate's own importer is written elsewhere).
-fn load_vm(text: &str) -> Option<Function> {
-    let mut b = Builder::new();
-    let mut names = std::collections::HashMap::new();
-    let mut last = None;
-    for line in text
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
-    {
-        let w: Vec<&str> = line.split_whitespace().collect();
-        let arg = |i: usize| names.get(w.get(i)?).copied();
-        let v = match w[1] {
-            "const" => b.constant(w[2].parse().ok()?),
-            "var-x" => b.var(Var::X),
-            "var-y" => b.var(Var::Y),
-            "var-z" => b.var(Var::Z),
-            "neg" => b.unary(UnaryOp::Neg, arg(2)?),
-            "square" => b.unary(UnaryOp::Square, arg(2)?),
-            "sqrt" => b.unary(UnaryOp::Sqrt, arg(2)?),
-            op => {
-                let o = match op {
-                    "add" => BinaryOp::Add,
-                    "sub" => BinaryOp::Sub,
-                    "mul" => BinaryOp::Mul,
-                    "div" => BinaryOp::Div,
-                    "min" => BinaryOp::Min,
-                    "max" => BinaryOp::Max,
-                    _ => return None,
-                };
-                b.binary(o, arg(2)?, arg(3)?)
-            }
-        };
-        names.insert(w[0], v);
-        last = Some(v);
-    }
-    Some(b.finish(last?))
+/// The prospero model through the crate's own `.vm` importer, simplified
+/// as the CLI does; `None` when `../shared` is not beside the checkout.
+fn prospero() -> Option<Function> {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models/prospero.vm");
+    let scene = ibeam::lang::load_scene(&path).ok()?;
+    Some(ibeam::ir::passes::simplify(&scene.objects[0].function))
 }
 
-/// Compile times and speed on /work/shared/models/prospero.vm (run with
+/// Compile times and speed on ../shared/models/prospero.vm (run with
 /// `cargo test --release --test jit -- --ignored prospero --nocapture`).
 #[test]
 #[ignore]
 fn prospero_timing() {
-    let text = std::fs::read_to_string("/work/shared/models/prospero.vm").unwrap();
-    let f = load_vm(&text).unwrap();
+    let f = prospero().expect("../shared/models/prospero.vm loads");
     let clif = clif_text(&f).unwrap();
     for part in clif.split("; evaluator: ").skip(1) {
         let name = part.lines().next().unwrap_or("");
@@ -958,14 +927,12 @@ fn prospero_timing() {
     }
 }
 
-/// Evaluation speed of the JIT against the local reference evaluator (with
-/// its buffer reused, as an interpreter would), on prospero (run in release
+/// Evaluation speed of the JIT against the interpreter, on prospero (run in release
 /// with `--ignored prospero_speed --nocapture`).
 #[test]
 #[ignore]
 fn prospero_speed() {
-    let text = std::fs::read_to_string("/work/shared/models/prospero.vm").unwrap();
-    let f = load_vm(&text).unwrap();
+    let f = prospero().expect("../shared/models/prospero.vm loads");
     let jit = JitEvaluator::new(&f).unwrap();
     let n = 20_000;
     let mut r = Rng::new(1);
@@ -986,29 +953,17 @@ fn prospero_speed() {
         );
         dt
     };
-    let mut buf: Vec<f64> = Vec::with_capacity(f.len());
-    let interp_point = |p: [f64; 3], v: &mut Vec<f64>| {
-        v.clear();
-        for op in &f.ops {
-            let r = match *op {
-                Op::Var(x) => p[x.index()],
-                Op::Const(c) => c,
-                Op::Unary(u, a) => point_unary(u, v[a.index()]),
-                Op::Binary(b, x, y) => point_binary(b, v[x.index()], v[y.index()]),
-                Op::Powi(a, n) => point_powi(v[a.index()], n),
-            };
-            v.push(r);
-        }
-        v[f.root.index()]
-    };
+    let interp = Interpreter::new(f.clone());
     jit.compile_all().unwrap();
     let ti = time("interp point", &mut || {
-        pts.iter().map(|p| interp_point(*p, &mut buf)).sum()
+        pts.iter().map(|p| Evaluator::point(&interp, *p)).sum()
     });
     let tj = time("jit point", &mut || pts.iter().map(|p| jit.point(*p)).sum());
     println!("point speedup {:.1}x", ti.as_secs_f64() / tj.as_secs_f64());
     let ti = time("interp interval", &mut || {
-        bxs.iter().map(|b| ref_interval(&f, *b).lo).sum()
+        bxs.iter()
+            .map(|b| Evaluator::interval(&interp, *b).lo)
+            .sum()
     });
     let tj = time("jit interval", &mut || {
         bxs.iter().map(|b| jit.interval(*b).lo).sum()
@@ -1054,8 +1009,8 @@ fn interval_speed() {
             ibeam::ir::passes::simplify(&scene.objects[0].function),
         ));
     }
-    if let Ok(text) = std::fs::read_to_string("../shared/models/prospero.vm") {
-        fs.push(("prospero", load_vm(&text).unwrap()));
+    if let Some(f) = prospero() {
+        fs.push(("prospero", f));
     }
     for (name, f) in fs {
         let jit = JitEvaluator::new(&f).unwrap();

@@ -3,26 +3,16 @@
 //! file, every diagnostic (message and position), `.vm` import, and the
 //! limits on deep and long inputs.
 
-use ibeam::ir::interp::{point_binary, point_powi, point_unary};
+use ibeam::eval::Evaluator;
+use ibeam::ir::interp::Interpreter;
 use ibeam::ir::{Function, Op};
 use ibeam::lang::{LoadError, function_from_formula, load_scene, load_scene_source};
 use ibeam::scene::{LightKind, Projection, Scene};
 use std::path::{Path, PathBuf};
 
-/// f(p) by one forward sweep over the ops.
+/// f(p) by the reference interpreter.
 fn eval(f: &Function, p: [f64; 3]) -> f64 {
-    let mut v: Vec<f64> = Vec::with_capacity(f.ops.len());
-    for op in &f.ops {
-        let r = match *op {
-            Op::Var(var) => p[var.index()],
-            Op::Const(c) => c,
-            Op::Unary(u, a) => point_unary(u, v[a.index()]),
-            Op::Binary(b, x, y) => point_binary(b, v[x.index()], v[y.index()]),
-            Op::Powi(a, n) => point_powi(v[a.index()], n),
-        };
-        v.push(r);
-    }
-    v[f.root.index()]
+    Interpreter::new(f.clone()).point(p)
 }
 
 fn scene(src: &str) -> Scene {
