@@ -86,38 +86,67 @@ impl Interval {
     }
 }
 
-/// Rounds a lower bound one ulp down (NaN stays NaN, -inf stays -inf).
-#[inline]
-pub fn down(v: f64) -> f64 {
-    v.next_down()
-}
+/// `2^-52`: `|v| * STEP` is at least one ulp of any normal `v`.
+const STEP: f64 = f64::EPSILON;
+/// The smallest positive subnormal: one ulp of every subnormal.
+const TINY: f64 = f64::from_bits(1);
 
-/// Rounds an upper bound one ulp up (NaN stays NaN, +inf stays +inf).
+/// An upper bound strictly above `v` (for finite `v`) by one or two ulps:
+/// `c + max(|c|·2⁻⁵², 2⁻¹⁰⁷⁴)` in round-to-nearest, where
+/// `c = max(-MAX, v)`.
+///
+/// Why it is sound: `|c|·2⁻⁵²` is at least one ulp of a normal `c` (exact,
+/// or rounded to a multiple of 2⁻¹⁰⁷⁴ no smaller than that ulp, itself such
+/// a multiple), and `2⁻¹⁰⁷⁴` is the ulp of a subnormal, so the exact sum
+/// is at least the next float above `c`, which is representable; rounding to nearest is monotone, so the
+/// result is `>= next_up(v)` and covers the half-ulp error of the
+/// correctly rounded op that produced `v`. It is at most two ulps above
+/// `v`. `up(+inf) = +inf` and `up(NaN)` is NaN; `up(-inf)` is just above
+/// `-MAX`, the right bound when a sum or product overflowed to `-inf`.
+/// It is branch-free and costs the same in both lanes of a SIMD register,
+/// which is why the JIT's intervals use it (see `crate::jit`); this
+/// function is the reference the JIT must match bit for bit.
 #[inline]
 pub fn up(v: f64) -> f64 {
-    v.next_up()
+    let c = mx(-f64::MAX, v);
+    c + mx(c.abs() * STEP, TINY)
 }
 
-/// min that ignores a NaN operand (NaN only if both are NaN). Used over the
-/// candidate bounds of `*` and `/`, where 0·inf and inf/inf give NaN for a
-/// combination of bounds that no real operand pair attains.
+/// A lower bound below `v`: `-up(-v)` (see [`up`]).
 #[inline]
-pub fn min_ignore_nan(a: f64, b: f64) -> f64 {
-    a.min(b)
+pub fn down(v: f64) -> f64 {
+    -up(-v)
 }
 
-/// max that ignores a NaN operand (NaN only if both are NaN).
+/// `x > y ? x : y`, the x86 `maxsd`/`maxpd` rule: `y` when either is NaN
+/// and on ties (so the sign of a zero result is fixed). The interval ops
+/// are written with these two so that the JIT's SIMD code gives the same
+/// bits.
 #[inline]
-pub fn max_ignore_nan(a: f64, b: f64) -> f64 {
-    a.max(b)
+pub fn mx(x: f64, y: f64) -> f64 {
+    if x > y { x } else { y }
 }
 
-/// `min(u, 0)` for an upper bound `u`, giving +0 for -0 and 0 for NaN.
-/// `f64::min(-0.0, 0.0)` picks either zero, and which one differs between
-/// debug and release builds; this keeps the bits (and the JIT) reproducible.
+/// `x < y ? x : y`, the x86 `minsd`/`minpd` rule (see [`mx`]).
 #[inline]
-fn nonpositive(u: f64) -> f64 {
-    if u < 0.0 { u } else { 0.0 }
+pub fn mn(x: f64, y: f64) -> f64 {
+    if x < y { x } else { y }
+}
+
+/// `mx` that ignores a NaN `y` (NaN only if both are NaN).
+#[inline]
+fn mx_ignore_nan(x: f64, y: f64) -> f64 {
+    if y.is_nan() { x } else { mx(x, y) }
+}
+
+/// NaN when `a` or `b` is NaN, else `r`: EMPTY propagating lane by lane.
+#[inline]
+fn nan_if(a: f64, b: f64, r: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        r
+    }
 }
 
 /// min that propagates NaN: the point semantics of the IR's `min`.
@@ -149,34 +178,73 @@ pub fn max_nan(a: f64, b: f64) -> f64 {
 /// unlike `f64::powi`, whose algorithm is not specified.
 pub fn powi_point(x: f64, n: i32) -> f64 {
     if n < 0 {
-        return 1.0 / powi_unsigned(x, n.unsigned_abs(), |v| v);
+        return 1.0 / powi_unsigned(x, n.unsigned_abs());
     }
-    powi_unsigned(x, n as u32, |v| v)
+    powi_unsigned(x, n as u32)
 }
 
-// Binary exponentiation with `round` applied after every multiplication; with
-// `up`/`down` on non-negative x it gives a rigorous upper/lower bound.
-fn powi_unsigned(x: f64, mut n: u32, round: impl Fn(f64) -> f64) -> f64 {
+fn powi_unsigned(x: f64, mut n: u32) -> f64 {
     let mut result = 1.0;
     let mut base = x;
     let mut first = true;
     while n > 0 {
         if n & 1 == 1 {
-            result = if first { base } else { round(result * base) };
+            result = if first { base } else { result * base };
             first = false;
         }
         n >>= 1;
         if n > 0 {
-            base = round(base * base);
+            base *= base;
         }
     }
     result
 }
 
+/// An upper bound of `sign(v)·|v|^n` (n >= 1): binary exponentiation where
+/// every product is `x·|y|`, so the sign of `v` rides along in one factor,
+/// rounded with [`up`]. For `v >= 0` each step bounds a magnitude from
+/// above; for `v < 0` it bounds `-magnitude` from above, i.e. the
+/// magnitude from below, and `|y|` of such a factor is again a lower
+/// bound of its magnitude, so every product stays an upper bound.
+pub(crate) fn pow_up(v: f64, mut n: u32) -> f64 {
+    let mut result: Option<f64> = None;
+    let mut base = v;
+    while n > 0 {
+        if n & 1 == 1 {
+            result = Some(match result {
+                None => base,
+                Some(r) => up(r * base.abs()),
+            });
+        }
+        n >>= 1;
+        if n > 0 {
+            base = up(base * base.abs());
+        }
+    }
+    result.unwrap_or(1.0)
+}
+
 // Named methods rather than operator traits: every call site of an
 // outward-rounded op stays visible as such.
+//
+// The ops are written on the "lanes" of an interval, `(-lo, hi)`: both are
+// upper bounds (of -x and of x), so one rounding, `up`, serves both, and
+// the JIT keeps an interval in one SIMD register in this form. Each method
+// here is the scalar twin of its JIT lowering, step by step.
 #[allow(clippy::should_implement_trait)]
 impl Interval {
+    /// `(-lo, hi)`.
+    #[inline]
+    pub fn lanes(self) -> (f64, f64) {
+        (-self.lo, self.hi)
+    }
+
+    /// The interval whose lanes are `(n, h)`: `[-n, h]`.
+    #[inline]
+    pub fn from_lanes(n: f64, h: f64) -> Interval {
+        Interval { lo: -n, hi: h }
+    }
+
     /// `-self` (exact).
     pub fn neg(self) -> Interval {
         Interval::new(-self.hi, -self.lo)
@@ -184,164 +252,159 @@ impl Interval {
 
     /// `self + o`.
     pub fn add(self, o: Interval) -> Interval {
-        Interval::new(down(self.lo + o.lo), up(self.hi + o.hi))
+        let ((an, ah), (bn, bh)) = (self.lanes(), o.lanes());
+        Interval::from_lanes(up(an + bn), up(ah + bh))
     }
 
     /// `self - o`.
     pub fn sub(self, o: Interval) -> Interval {
-        Interval::new(down(self.lo - o.hi), up(self.hi - o.lo))
+        let ((an, ah), (bn, bh)) = (self.lanes(), o.lanes());
+        Interval::from_lanes(up(an + bh), up(ah + bn))
+    }
+
+    /// Lanes of the hull of the four bound products (or quotients, with
+    /// `op` = division) of non-EMPTY operands: both lanes are maxima, of
+    /// the negated and of the plain candidates, in the JIT's order. A NaN
+    /// candidate (0·inf, or inf/inf) is skipped and 0 joins the hull
+    /// instead: 0·inf means 0 is in a factor, so 0 is a product; inf/inf
+    /// means the divisor is unbounded, so quotients come arbitrarily close
+    /// to 0. One operand [0, 0] and the other infinite gives [0, 0] (then
+    /// rounded).
+    fn hull4(self, o: Interval, op: impl Fn(f64, f64) -> f64) -> (f64, f64) {
+        let (an, ah) = self.lanes();
+        let (bl, bh) = (o.lo, o.hi);
+        let (al, nah) = (-an, -ah);
+        let lane = |p: [f64; 4]| {
+            let m = p.iter().fold(f64::NEG_INFINITY, |acc, &x| mx(x, acc));
+            let any_nan = p.iter().any(|x| x.is_nan());
+            up(mx(if any_nan { 0.0 } else { f64::NEG_INFINITY }, m))
+        };
+        let n = lane([op(an, bl), op(an, bh), op(nah, bl), op(nah, bh)]);
+        let h = lane([op(ah, bh), op(ah, bl), op(al, bh), op(al, bl)]);
+        (n, h)
     }
 
     /// `self * o`: hull of the four bound products, ignoring the NaN of
-    /// 0·inf, each bound then rounded outward.
+    /// 0·inf, each bound then rounded outward; EMPTY if either is.
     pub fn mul(self, o: Interval) -> Interval {
-        let p = [
-            self.lo * o.lo,
-            self.lo * o.hi,
-            self.hi * o.lo,
-            self.hi * o.hi,
-        ];
-        let lo = min_ignore_nan(min_ignore_nan(p[0], p[1]), min_ignore_nan(p[2], p[3]));
-        let hi = max_ignore_nan(max_ignore_nan(p[0], p[1]), max_ignore_nan(p[2], p[3]));
-        if lo.is_nan() {
-            // All four products are 0·inf: one operand is [0, 0] and the
-            // other has only infinite bounds, so every real product is 0.
-            return if self.is_empty() || o.is_empty() {
-                Interval::EMPTY
-            } else {
-                Interval::point(0.0)
-            };
+        if self.is_empty() || o.is_empty() {
+            return Interval::EMPTY;
         }
-        Interval::new(down(lo), up(hi))
+        let (n, h) = self.hull4(o, |x, y| x * y);
+        Interval::from_lanes(n, h)
     }
 
     /// `self / o` over the nonzero part of `o` (a quotient by 0 is not
-    /// real): EMPTY when o = [0, 0], a half-line when 0 is an end of `o`,
-    /// the whole line when 0 is inside `o` (unless self = [0, 0]).
+    /// real). When 0 is outside `o`: the hull of the four quotients (EMPTY
+    /// if either operand is). Otherwise see [`Interval::div_by_zero_part`].
     pub fn div(self, o: Interval) -> Interval {
+        if o.lo > 0.0 || o.hi < 0.0 {
+            if self.is_empty() || o.is_empty() {
+                return Interval::EMPTY;
+            }
+            let (n, h) = self.hull4(o, |x, y| x / y);
+            return Interval::from_lanes(n, h);
+        }
+        self.div_by_zero_part(o)
+    }
+
+    /// `self / o` when 0 is in `o` or either is EMPTY (the JIT calls this
+    /// out of line): EMPTY when o = [0, 0], a half-line when 0 is an end
+    /// of `o`, the whole line when 0 is inside `o` (unless self = [0, 0]).
+    pub fn div_by_zero_part(self, o: Interval) -> Interval {
         if self.is_empty() || o.is_empty() || (o.lo == 0.0 && o.hi == 0.0) {
             return Interval::EMPTY;
         }
-        if o.lo <= 0.0 && 0.0 <= o.hi {
-            if self.lo == 0.0 && self.hi == 0.0 {
-                return Interval::point(0.0);
-            }
-            if o.lo < 0.0 && 0.0 < o.hi {
-                return Interval::ENTIRE;
-            }
-            // 0 is an end of o: the divisor keeps one sign, o = [0+, hi] or
-            // [lo, 0-], and the quotient is bounded on one side.
-            let positive = o.lo == 0.0;
-            let d = if positive { o.hi } else { o.lo };
-            return if self.lo >= 0.0 {
-                if positive {
-                    Interval::new(down(self.lo / d).max(0.0), f64::INFINITY)
-                } else {
-                    Interval::new(f64::NEG_INFINITY, nonpositive(up(self.lo / d)))
-                }
-            } else if self.hi <= 0.0 {
-                if positive {
-                    Interval::new(f64::NEG_INFINITY, nonpositive(up(self.hi / d)))
-                } else {
-                    Interval::new(down(self.hi / d).max(0.0), f64::INFINITY)
-                }
-            } else {
-                Interval::ENTIRE
-            };
+        if self.lo == 0.0 && self.hi == 0.0 {
+            return Interval::point(0.0);
         }
-        let q = [
-            self.lo / o.lo,
-            self.lo / o.hi,
-            self.hi / o.lo,
-            self.hi / o.hi,
-        ];
-        let lo = min_ignore_nan(min_ignore_nan(q[0], q[1]), min_ignore_nan(q[2], q[3]));
-        let hi = max_ignore_nan(max_ignore_nan(q[0], q[1]), max_ignore_nan(q[2], q[3]));
-        Interval::new(down(lo), up(hi))
+        if o.lo < 0.0 && 0.0 < o.hi {
+            return Interval::ENTIRE;
+        }
+        // 0 is an end of o: the divisor keeps one sign, o = [0+, hi] or
+        // [lo, 0-], and the quotient is bounded on one side.
+        let positive = o.lo == 0.0;
+        let d = if positive { o.hi } else { o.lo };
+        let nonpositive = |u: f64| if u < 0.0 { u } else { 0.0 };
+        if self.lo >= 0.0 {
+            if positive {
+                Interval::new(down(self.lo / d).max(0.0), f64::INFINITY)
+            } else {
+                Interval::new(f64::NEG_INFINITY, nonpositive(up(self.lo / d)))
+            }
+        } else if self.hi <= 0.0 {
+            if positive {
+                Interval::new(f64::NEG_INFINITY, nonpositive(up(self.hi / d)))
+            } else {
+                Interval::new(down(self.hi / d).max(0.0), f64::INFINITY)
+            }
+        } else {
+            Interval::ENTIRE
+        }
     }
 
-    /// `|self|` (exact).
+    /// `|self|` (exact): lanes `(min(-lo, hi, 0), max(-lo, hi))`, i.e.
+    /// `[max(lo, -hi, 0), max(-lo, hi)]`. An EMPTY operand keeps a NaN lane.
     pub fn abs(self) -> Interval {
-        if self.is_empty() {
-            Interval::EMPTY
-        } else if self.lo >= 0.0 {
-            self
-        } else if self.hi <= 0.0 {
-            self.neg()
-        } else {
-            Interval::new(0.0, max_nan(-self.lo, self.hi))
-        }
+        let (n, h) = self.lanes();
+        Interval::from_lanes(mn(0.0, mn(n, h)), mx(h, n))
     }
 
     /// `self²`, never negative (tighter than `self * self` when 0 ∈ self).
     pub fn square(self) -> Interval {
-        if self.is_empty() {
-            return Interval::EMPTY;
-        }
-        let a = self.abs();
-        Interval::new(down(a.lo * a.lo).max(0.0), up(a.hi * a.hi))
+        let (n, h) = self.abs().lanes();
+        Interval::from_lanes(mn(0.0, up(n * n.abs())), up(h * h.abs()))
     }
 
     /// `sqrt(self)` over the non-negative part; EMPTY if self < 0.
     pub fn sqrt(self) -> Interval {
-        if self.is_empty() || self.hi < 0.0 {
+        let n = mn(0.0, up(-mx(0.0, self.lo).sqrt()));
+        let h = up(self.hi.sqrt());
+        if n.is_nan() || h.is_nan() {
             return Interval::EMPTY;
         }
-        let lo = if self.lo <= 0.0 {
-            0.0
-        } else {
-            down(self.lo.sqrt()).max(0.0)
-        };
-        Interval::new(lo, up(self.hi.sqrt()))
+        Interval::from_lanes(n, h)
     }
 
-    /// `min(self, o)` (exact; EMPTY if either is).
+    /// `min(self, o)` (exact; a bound is NaN where either operand's is).
     pub fn min(self, o: Interval) -> Interval {
-        Interval::new(min_nan(self.lo, o.lo), min_nan(self.hi, o.hi))
+        let ((an, ah), (bn, bh)) = (self.lanes(), o.lanes());
+        Interval::from_lanes(nan_if(an, bn, mx(an, bn)), nan_if(ah, bh, mn(ah, bh)))
     }
 
-    /// `max(self, o)` (exact; EMPTY if either is).
+    /// `max(self, o)` (exact; a bound is NaN where either operand's is).
     pub fn max(self, o: Interval) -> Interval {
-        Interval::new(max_nan(self.lo, o.lo), max_nan(self.hi, o.hi))
+        let ((an, ah), (bn, bh)) = (self.lanes(), o.lanes());
+        Interval::from_lanes(nan_if(an, bn, mn(an, bn)), nan_if(ah, bh, mx(ah, bh)))
     }
 
-    /// `self^n` for integer n: each bound by binary exponentiation with
-    /// outward rounding after every step; negative n divides 1 by the
-    /// positive power. `self^0` is [1, 1] (as the point semantics give 1).
+    /// The smallest interval holding both, ignoring an EMPTY one (EMPTY
+    /// only if both are).
+    pub fn hull(self, o: Interval) -> Interval {
+        let ((an, ah), (bn, bh)) = (self.lanes(), o.lanes());
+        Interval::from_lanes(mx_ignore_nan(an, bn), mx_ignore_nan(ah, bh))
+    }
+
+    /// `self^n` for integer n: each lane by [`pow_up`] (even powers from
+    /// `|self|`, whose lower lane is then clamped so the result is never
+    /// negative); negative n divides 1 by the positive power. `self^0` is
+    /// [1, 1] (as the point semantics give 1).
     pub fn powi(self, n: i32) -> Interval {
         if n == 0 {
             return Interval::point(1.0);
         }
-        if self.is_empty() {
-            return Interval::EMPTY;
-        }
-        if n < 0 {
-            return Interval::point(1.0).div(self.powi_positive(n.unsigned_abs()));
-        }
-        self.powi_positive(n as u32)
-    }
-
-    fn powi_positive(self, n: u32) -> Interval {
-        let up_pow = |m: f64| powi_unsigned(m, n, up);
-        let down_pow = |m: f64| powi_unsigned(m, n, |v| down(v).max(0.0));
-        if n.is_multiple_of(2) {
-            let a = self.abs();
-            let lo = if n == 1 { a.lo } else { down_pow(a.lo) };
-            Interval::new(lo, up_pow(a.hi))
+        let m = n.unsigned_abs();
+        let p = if m.is_multiple_of(2) {
+            let (x, y) = self.abs().lanes();
+            Interval::from_lanes(mn(0.0, pow_up(x, m)), pow_up(y, m))
         } else {
-            // Odd powers are increasing: bound each end, keeping signs.
-            let lo = if self.lo >= 0.0 {
-                down_pow(self.lo)
-            } else {
-                -up_pow(-self.lo)
-            };
-            let hi = if self.hi >= 0.0 {
-                up_pow(self.hi)
-            } else {
-                -down_pow(-self.hi)
-            };
-            Interval::new(lo, hi)
+            let (x, y) = self.lanes();
+            Interval::from_lanes(pow_up(x, m), pow_up(y, m))
+        };
+        if n < 0 {
+            return Interval::point(1.0).div(p);
         }
+        p
     }
 }
 

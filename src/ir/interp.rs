@@ -252,17 +252,6 @@ fn iscale(fp: Interval, a: IntervalGrad, v: Interval) -> IntervalGrad {
     }
 }
 
-/// The smallest interval holding both (EMPTY only if both are).
-fn hull(a: Interval, b: Interval) -> Interval {
-    if a.is_empty() {
-        b
-    } else if b.is_empty() {
-        a
-    } else {
-        Interval::new(a.lo.min(b.lo), a.hi.max(b.hi))
-    }
-}
-
 /// Intervals of value and gradient of a one-operand op over a box.
 pub fn igrad_unary(op: UnaryOp, a: IntervalGrad) -> IntervalGrad {
     let v = interval_unary(op, a.v);
@@ -348,7 +337,7 @@ pub fn igrad_binary(op: BinaryOp, a: IntervalGrad, b: IntervalGrad) -> IntervalG
                     } else if second {
                         b.d[i]
                     } else {
-                        hull(a.d[i], b.d[i])
+                        a.d[i].hull(b.d[i])
                     }
                 }),
             }

@@ -1,12 +1,17 @@
-//! Small CLIF building blocks shared by every evaluator kind: ulp stepping,
-//! the min/max flavours, and the interval ops of [`crate::interval`].
+//! Small CLIF building blocks shared by every evaluator kind: the min/max
+//! flavours, and the interval ops of [`crate::interval`].
 //!
-//! Every helper here mirrors one function of `crate::interval` or
-//! `crate::ir::interp` so that the native code gives the same bits; the
-//! comments say where (and why) a lowering may differ.
+//! An interval lives in one `F64X2` register as its lanes `(-lo, hi)`: both
+//! are upper bounds, so one SIMD rounding step (`interval::up`, branch-free)
+//! rounds both bounds outward, and most ops are a handful of packed
+//! instructions. Every helper here mirrors one function of
+//! `crate::interval` or `crate::ir::interp` step by step, so that the native
+//! code gives the same bits (NaN payloads aside).
 
 use cranelift_codegen::ir::condcodes::FloatCC;
-use cranelift_codegen::ir::{FuncRef, InstBuilder, MemFlagsData, Value, types};
+use cranelift_codegen::ir::{
+    BlockArg, ConstantData, Endianness, FuncRef, InstBuilder, MemFlagsData, Value, types,
+};
 use cranelift_frontend::FunctionBuilder;
 
 use crate::ir::{BinaryOp, UnaryOp};
@@ -24,12 +29,9 @@ pub(crate) fn use_int_select(live: &[bool]) -> bool {
     live.iter().filter(|&&l| l).count() >= INT_SELECT_FROM
 }
 
-/// An interval as two SSA values (lower, upper bound).
+/// An interval as one `F64X2` SSA value holding its lanes `(-lo, hi)`.
 #[derive(Copy, Clone, Debug)]
-pub(crate) struct Iv {
-    pub lo: Value,
-    pub hi: Value,
-}
+pub(crate) struct Iv(pub Value);
 
 /// The transcendental shims imported into the function being built.
 #[derive(Copy, Clone, Debug)]
@@ -40,8 +42,9 @@ pub(crate) struct ShimRefs {
     pub point_binary: [FuncRef; 2],
     /// Interval shims: exp, ln, sin, cos ((lo, hi) -> (lo, hi)).
     pub interval_unary: [FuncRef; 4],
-    /// Interval shims: atan2, pow ((lo, hi, lo, hi) -> (lo, hi)).
-    pub interval_binary: [FuncRef; 2],
+    /// Interval shims: atan2, pow, and division by a divisor holding 0
+    /// ((lo, hi, lo, hi) -> (lo, hi)).
+    pub interval_binary: [FuncRef; 3],
 }
 
 /// Position of a transcendental unary op in [`ShimRefs`] arrays.
@@ -163,308 +166,353 @@ impl Emitter<'_, '_> {
         self.select(a_nan, a, m)
     }
 
-    /// `interval::min_ignore_nan` (`f64::min`): NaN only if both are NaN.
-    /// When `b` is NaN `minsd` gives `b`, so the select returns `a` then. On
-    /// a tie of `-0` and `+0` this may pick the other zero than `f64::min`;
-    /// the callers round the result outward with `next_down`/`next_up`,
-    /// which map both zeros to the same value, so the bits agree.
-    pub fn min_ign(&mut self, a: Value, b: Value) -> Value {
-        let m = self.minsd(a, b);
-        let b_nan = self.fcmp(FloatCC::Unordered, b, b);
-        self.select(b_nan, a, m)
+    // ---- packed intervals -------------------------------------------
+
+    /// An `F64X2` constant with lanes `(l0, l1)`.
+    pub fn vconst(&mut self, l0: f64, l1: f64) -> Value {
+        let mut bytes = l0.to_le_bytes().to_vec();
+        bytes.extend_from_slice(&l1.to_le_bytes());
+        let c = self.b.func.dfg.constants.insert(ConstantData::from(bytes));
+        self.b.ins().vconst(types::F64X2, c)
     }
 
-    /// `interval::max_ignore_nan` (see [`Self::min_ign`]).
-    pub fn max_ign(&mut self, a: Value, b: Value) -> Value {
-        let m = self.maxsd(a, b);
-        let b_nan = self.fcmp(FloatCC::Unordered, b, b);
-        self.select(b_nan, a, m)
+    /// A byte shuffle of two `F64X2` values (`mask` indexes the 32 bytes
+    /// of `x` then `y`); the x64 backend turns the masks used here into one
+    /// `pshufd` or `pblendw`.
+    fn shuffle(&mut self, x: Value, y: Value, mask: [u8; 16]) -> Value {
+        let le = MemFlagsData::new().with_endianness(Endianness::Little);
+        let xb = self.b.ins().bitcast(types::I8X16, le, x);
+        let yb = self.b.ins().bitcast(types::I8X16, le, y);
+        let imm = self
+            .b
+            .func
+            .dfg
+            .immediates
+            .push(ConstantData::from(mask.to_vec()));
+        let r = self.b.ins().shuffle(xb, yb, imm);
+        self.b.ins().bitcast(types::F64X2, le, r)
     }
 
-    /// `x.max(0.0)` where `x` is a `next_down` result: `maxsd x, 0` gives 0
-    /// for NaN as `f64::max` does, and `next_down` never returns `-0`, so
-    /// the signed-zero tie cannot arise.
-    pub fn clamp0(&mut self, x: Value) -> Value {
-        let z = self.c(0.0);
-        self.maxsd(x, z)
+    /// `(x1, x0)`.
+    fn swap(&mut self, x: Value) -> Value {
+        self.shuffle(x, x, [8, 9, 10, 11, 12, 13, 14, 15, 0, 1, 2, 3, 4, 5, 6, 7])
     }
 
-    /// `f64::next_up` on the bits, without touching MXCSR: adding +0 turns
-    /// -0 into +0 (round-to-nearest), then one integer step away from or
-    /// towards zero by the sign (`+1` for positive, `-1` for negative bit
-    /// patterns; +0 becomes the smallest subnormal, `MAX` becomes +inf,
-    /// -inf becomes `-MAX`). NaN and +inf, where that step is wrong, are
-    /// returned unchanged as the reference does. (A branch-free variant,
-    /// `maxsd(step(minsd(MAX, v) + 0), v)`, measured no faster: the select
-    /// here is always predicted and stays off the dependency chain.)
-    pub fn next_up(&mut self, v: Value) -> Value {
-        let z = self.c(0.0);
-        let s = self.add(v, z);
-        let bits = self.b.ins().bitcast(types::I64, MemFlagsData::new(), s);
-        let sign = self.b.ins().sshr_imm_u(bits, 63);
-        let step = self.b.ins().bor_imm_u(sign, 1);
-        let nb = self.b.ins().iadd(bits, step);
-        let r = self.b.ins().bitcast(types::F64, MemFlagsData::new(), nb);
-        let inf = self.c(f64::INFINITY);
-        let finite_or_neg_inf = self.fcmp(FloatCC::LessThan, v, inf);
-        self.fselect(finite_or_neg_inf, r, v)
-    }
-
-    /// `f64::next_down(v) = -next_up(-v)`, exactly, NaN included.
-    pub fn next_down(&mut self, v: Value) -> Value {
-        let n = self.neg(v);
-        let u = self.next_up(n);
-        self.neg(u)
-    }
-
-    /// Whether an interval is EMPTY (either bound NaN).
-    pub fn is_empty(&mut self, a: Iv) -> Value {
-        self.fcmp(FloatCC::Unordered, a.lo, a.hi)
-    }
-
-    /// `if cond { EMPTY } else { r }`.
-    pub fn empty_if(&mut self, cond: Value, r: Iv) -> Iv {
-        let nan = self.c(f64::NAN);
-        Iv {
-            lo: self.select(cond, nan, r.lo),
-            hi: self.select(cond, nan, r.hi),
+    /// `(x0, y1)`.
+    fn blend(&mut self, x: Value, y: Value) -> Value {
+        let mut m = [0u8; 16];
+        for (i, b) in m.iter_mut().enumerate() {
+            *b = if i < 8 { i as u8 } else { 16 + i as u8 };
         }
+        self.shuffle(x, y, m)
+    }
+
+    /// A packed compare as an `F64X2` bit mask.
+    fn vcmp(&mut self, cc: FloatCC, x: Value, y: Value) -> Value {
+        let m = self.b.ins().fcmp(cc, x, y);
+        self.b.ins().bitcast(types::F64X2, MemFlagsData::new(), m)
+    }
+
+    /// `maxpd x, y` lane-wise: `x > y ? x : y` (`interval::mx`); the
+    /// backend matches exactly this shape.
+    fn vmax(&mut self, x: Value, y: Value) -> Value {
+        let m = self.vcmp(FloatCC::LessThan, y, x);
+        self.b.ins().bitselect(m, x, y)
+    }
+
+    /// `minpd x, y` lane-wise: `x < y ? x : y` (`interval::mn`).
+    fn vmin(&mut self, x: Value, y: Value) -> Value {
+        let m = self.vcmp(FloatCC::LessThan, x, y);
+        self.b.ins().bitselect(m, x, y)
+    }
+
+    /// Lane-wise: NaN where `a` or `b` is NaN, else `r`.
+    fn vnan_if(&mut self, a: Value, b: Value, r: Value) -> Value {
+        let m = self.vcmp(FloatCC::Unordered, a, b);
+        self.b.ins().bor(r, m)
+    }
+
+    /// Both lanes NaN where any lane of `a` or `b` is NaN, else `r`: the
+    /// `is_empty() → EMPTY` test of the reference.
+    fn vempty_if(&mut self, a: Value, b: Value, r: Value) -> Value {
+        let m = self.vcmp(FloatCC::Unordered, a, b);
+        let s = self.swap(m);
+        let m = self.b.ins().bor(m, s);
+        self.b.ins().bor(r, m)
+    }
+
+    /// `interval::up` on both lanes: `c + max(|c|·2⁻⁵², 2⁻¹⁰⁷⁴)` with
+    /// `c = max(-MAX, v)` (NaN stays NaN: `maxpd` returns its second
+    /// operand).
+    pub fn vup(&mut self, v: Value) -> Value {
+        let neg_max = self.vconst(-f64::MAX, -f64::MAX);
+        let c = self.vmax(neg_max, v);
+        let a = self.b.ins().fabs(c);
+        let step = self.vconst(f64::EPSILON, f64::EPSILON);
+        let tiny = self.vconst(f64::from_bits(1), f64::from_bits(1));
+        let t = self.b.ins().fmul(a, step);
+        let t = self.vmax(t, tiny);
+        self.b.ins().fadd(c, t)
+    }
+
+    /// Lane 0 negated: `(-x0, x1)`; turns `[lo, hi]` into lanes and back.
+    fn flip_lo(&mut self, x: Value) -> Value {
+        let m = self.vconst(-0.0, 0.0);
+        self.b.ins().bxor(x, m)
+    }
+
+    /// Loads an `Interval` (`[lo, hi]` in memory) as lanes.
+    pub fn iv_load(&mut self, p: Value, offset: i32) -> Iv {
+        let v = self
+            .b
+            .ins()
+            .load(types::F64X2, MemFlagsData::new().with_notrap(), p, offset);
+        Iv(self.flip_lo(v))
+    }
+
+    /// Stores lanes as an `Interval`.
+    pub fn iv_store(&mut self, a: Iv, p: Value, offset: i32) {
+        let v = self.flip_lo(a.0);
+        self.b
+            .ins()
+            .store(MemFlagsData::new().with_notrap(), v, p, offset);
+    }
+
+    /// The scalar lanes `(-lo, hi)`.
+    pub fn iv_lanes(&mut self, a: Iv) -> (Value, Value) {
+        (
+            self.b.ins().extractlane(a.0, 0),
+            self.b.ins().extractlane(a.0, 1),
+        )
+    }
+
+    /// The bounds `(lo, hi)` as scalars.
+    fn iv_bounds(&mut self, a: Iv) -> (Value, Value) {
+        let (n, h) = self.iv_lanes(a);
+        (self.neg(n), h)
+    }
+
+    /// Lanes from the bounds `(lo, hi)`.
+    fn iv_from_bounds(&mut self, lo: Value, hi: Value) -> Iv {
+        let n = self.neg(lo);
+        let v = self.b.ins().scalar_to_vector(types::F64X2, n);
+        Iv(self.b.ins().insertlane(v, hi, 1))
+    }
+
+    /// `c ? a : b` on intervals.
+    pub fn iv_select(&mut self, c: Value, a: Iv, b: Iv) -> Iv {
+        if !self.int_select {
+            return Iv(self.b.ins().select(c, a.0, b.0));
+        }
+        // Branch-free in large functions (see `select`): a lane mask.
+        let m = self.b.ins().bmask(types::I64, c);
+        let m = self.b.ins().splat(types::I64X2, m);
+        let m = self.b.ins().bitcast(types::F64X2, MemFlagsData::new(), m);
+        Iv(self.b.ins().bitselect(m, a.0, b.0))
     }
 
     pub fn iv_const(&mut self, v: f64) -> Iv {
-        let c = self.c(v);
-        Iv { lo: c, hi: c }
+        Iv(self.vconst(-v, v))
     }
 
+    /// `Interval::neg`: swap the lanes (exact).
     pub fn iv_neg(&mut self, a: Iv) -> Iv {
-        Iv {
-            lo: self.neg(a.hi),
-            hi: self.neg(a.lo),
-        }
+        Iv(self.swap(a.0))
     }
 
     pub fn iv_add(&mut self, a: Iv, b: Iv) -> Iv {
-        let lo = self.add(a.lo, b.lo);
-        let hi = self.add(a.hi, b.hi);
-        Iv {
-            lo: self.next_down(lo),
-            hi: self.next_up(hi),
-        }
+        let s = self.b.ins().fadd(a.0, b.0);
+        Iv(self.vup(s))
     }
 
     pub fn iv_sub(&mut self, a: Iv, b: Iv) -> Iv {
-        let lo = self.sub(a.lo, b.hi);
-        let hi = self.sub(a.hi, b.lo);
-        Iv {
-            lo: self.next_down(lo),
-            hi: self.next_up(hi),
-        }
+        let bs = self.swap(b.0);
+        let s = self.b.ins().fadd(a.0, bs);
+        Iv(self.vup(s))
     }
 
-    /// Hull of four candidate bounds, NaN-ignoring, rounded outward: the
-    /// shared tail of `Interval::mul` and `Interval::div`.
-    fn hull4(&mut self, p: [Value; 4]) -> Iv {
-        let l01 = self.min_ign(p[0], p[1]);
-        let l23 = self.min_ign(p[2], p[3]);
-        let lo = self.min_ign(l01, l23);
-        let h01 = self.max_ign(p[0], p[1]);
-        let h23 = self.max_ign(p[2], p[3]);
-        let hi = self.max_ign(h01, h23);
-        Iv {
-            lo: self.next_down(lo),
-            hi: self.next_up(hi),
+    /// `Interval::hull4` with packed products or quotients: lane 0 gathers
+    /// the negated candidates, lane 1 the plain ones, in the reference's
+    /// order, each `max` skipping a NaN candidate; a lane with a NaN
+    /// candidate then also takes 0.
+    fn hull4(&mut self, a: Iv, b: Iv, div: bool) -> Value {
+        let bn = self.flip_lo(b.0); // (b.lo, b.hi)
+        let bs = self.swap(bn); // (b.hi, b.lo)
+        let sa = self.swap(a.0);
+        let nas = self.b.ins().fneg(sa); // (-a.hi, a.lo)
+        let ninf = self.vconst(f64::NEG_INFINITY, f64::NEG_INFINITY);
+        let mut acc = ninf;
+        let mut p = Vec::with_capacity(4);
+        for (x, y) in [(a.0, bn), (a.0, bs), (nas, bn), (nas, bs)] {
+            let q = if div {
+                self.b.ins().fdiv(x, y)
+            } else {
+                self.b.ins().fmul(x, y)
+            };
+            acc = self.vmax(q, acc);
+            p.push(q);
         }
+        let n01 = self.vcmp(FloatCC::Unordered, p[0], p[1]);
+        let n23 = self.vcmp(FloatCC::Unordered, p[2], p[3]);
+        let any_nan = self.b.ins().bor(n01, n23);
+        // 0 where a candidate was NaN, -inf elsewhere.
+        let z = self.b.ins().band_not(ninf, any_nan);
+        let acc = self.vmax(z, acc);
+        self.vup(acc)
     }
 
-    /// `Interval::mul`: when every bound product is 0·inf (one operand
-    /// `[0, 0]`, the other with only infinite bounds) the NaN-ignoring hull
-    /// is NaN and the answer is `[0, 0]`; EMPTY operands give EMPTY.
-    pub fn iv_mul(&mut self, a: Iv, b: Iv) -> Iv {
-        let p = [
-            self.mul(a.lo, b.lo),
-            self.mul(a.lo, b.hi),
-            self.mul(a.hi, b.lo),
-            self.mul(a.hi, b.hi),
-        ];
-        let h = self.hull4(p);
-        let all_nan = self.fcmp(FloatCC::Unordered, h.lo, h.lo);
-        let z = self.c(0.0);
-        let r = Iv {
-            lo: self.select(all_nan, z, h.lo),
-            hi: self.select(all_nan, z, h.hi),
+    /// `Interval::mul`. A factor that is a positive or negative constant
+    /// takes a short path with the same bits: the hull of `a·[c, c]` is
+    /// `a·c` (lanes swapped for c < 0), since the maxima the general path
+    /// picks are those same products.
+    pub fn iv_mul(&mut self, a: Iv, b: Iv, b_const: Option<f64>) -> Iv {
+        let r = match b_const {
+            Some(c) if c.is_finite() && c != 0.0 => {
+                let x = if c > 0.0 { a.0 } else { self.swap(a.0) };
+                let k = self.vconst(c.abs(), c.abs());
+                let p = self.b.ins().fmul(x, k);
+                self.vup(p)
+            }
+            _ => self.hull4(a, b, false),
         };
-        let ea = self.is_empty(a);
-        let eb = self.is_empty(b);
-        let e = self.b.ins().bor(ea, eb);
-        self.empty_if(e, r)
+        Iv(self.vempty_if(a.0, b.0, r))
     }
 
-    /// `Interval::div`, its cases as selects (no branches): the hull of
-    /// the four quotients when 0 is outside the divisor; `[0, 0]` for a
-    /// dividend `[0, 0]` and ENTIRE for any other when 0 is strictly inside
-    /// it; a half-line bounded by `num / d` when 0 is one end of the
-    /// divisor and `d` the other (`num` the dividend end nearest 0);
-    /// EMPTY for a divisor `[0, 0]` or an EMPTY operand.
+    /// `Interval::div`: the quotient hull when 0 is outside the divisor
+    /// (`b.lo > 0` or `b.hi < 0`: a lane of `(-b.lo, b.hi)` below 0);
+    /// otherwise an out-of-line call of `Interval::div_by_zero_part`, a
+    /// rare branch that keeps the common path short.
     pub fn iv_div(&mut self, a: Iv, b: Iv) -> Iv {
-        let q = [
-            self.div(a.lo, b.lo),
-            self.div(a.lo, b.hi),
-            self.div(a.hi, b.lo),
-            self.div(a.hi, b.hi),
-        ];
-        let h = self.hull4(q);
-        let z = self.c(0.0);
-        let ninf = self.c(f64::NEG_INFINITY);
-        let pinf = self.c(f64::INFINITY);
-        // Half-line case: positive divisor [0, hi] (d = hi) or negative
-        // [lo, 0] (d = lo); the reference tests `o.lo == 0` first.
-        let positive = self.fcmp(FloatCC::Equal, b.lo, z);
-        let d = self.select(positive, b.hi, b.lo);
-        let a_nonneg = self.fcmp(FloatCC::GreaterThanOrEqual, a.lo, z);
-        let a_nonpos = self.fcmp(FloatCC::LessThanOrEqual, a.hi, z);
-        let num = self.select(a_nonneg, a.lo, a.hi);
-        let qd = self.div(num, d);
-        let qdown = self.next_down(qd);
-        let qdown = self.clamp0(qdown);
-        let qup = self.next_up(qd);
-        // `interval::nonpositive`: -0 and NaN (inf / inf) become +0.
-        let lt0 = self.fcmp(FloatCC::LessThan, qup, z);
-        let qup = self.select(lt0, qup, z);
-        // The bound is a lower one (result [q, inf]) when the signs agree.
-        let same_sign_pos = self.b.ins().band(a_nonneg, positive);
-        let neg_div = self.b.ins().bnot(positive);
-        let same_sign_neg = self.b.ins().band(a_nonpos, neg_div);
-        let lower = self.b.ins().bor(same_sign_pos, same_sign_neg);
-        let half_lo = self.select(lower, qdown, ninf);
-        let half_hi = self.select(lower, pinf, qup);
-        let one_sign = self.b.ins().bor(a_nonneg, a_nonpos);
-        let half_lo = self.select(one_sign, half_lo, ninf);
-        let half_hi = self.select(one_sign, half_hi, pinf);
-        // 0 strictly inside the divisor: ENTIRE.
-        let lo_lt0 = self.fcmp(FloatCC::LessThan, b.lo, z);
-        let hi_gt0 = self.fcmp(FloatCC::GreaterThan, b.hi, z);
-        let inside = self.b.ins().band(lo_lt0, hi_gt0);
-        let zlo = self.select(inside, ninf, half_lo);
-        let zhi = self.select(inside, pinf, half_hi);
-        // Dividend [0, 0] over a divisor holding 0: [0, 0].
-        let alo0 = self.fcmp(FloatCC::Equal, a.lo, z);
-        let ahi0 = self.fcmp(FloatCC::Equal, a.hi, z);
-        let a_zero = self.b.ins().band(alo0, ahi0);
-        let zlo = self.select(a_zero, z, zlo);
-        let zhi = self.select(a_zero, z, zhi);
-        let lo_le0 = self.fcmp(FloatCC::LessThanOrEqual, b.lo, z);
-        let hi_ge0 = self.fcmp(FloatCC::GreaterThanOrEqual, b.hi, z);
-        let has0 = self.b.ins().band(lo_le0, hi_ge0);
-        let r = Iv {
-            lo: self.select(has0, zlo, h.lo),
-            hi: self.select(has0, zhi, h.hi),
-        };
-        let lo_eq0 = self.fcmp(FloatCC::Equal, b.lo, z);
-        let hi_eq0 = self.fcmp(FloatCC::Equal, b.hi, z);
-        let zero = self.b.ins().band(lo_eq0, hi_eq0);
-        let ea = self.is_empty(a);
-        let eb = self.is_empty(b);
-        let e = self.b.ins().bor(ea, eb);
-        let e = self.b.ins().bor(e, zero);
-        self.empty_if(e, r)
+        let z = self.vconst(0.0, 0.0);
+        let neg = self.b.ins().fcmp(FloatCC::LessThan, b.0, z);
+        let zero_outside = self.b.ins().vany_true(neg);
+        let fast = self.b.create_block();
+        let slow = self.b.create_block();
+        let join = self.b.create_block();
+        let r = self.b.append_block_param(join, types::F64X2);
+        self.b.set_cold_block(slow);
+        self.b.ins().brif(zero_outside, fast, &[], slow, &[]);
+        self.b.seal_block(fast);
+        self.b.seal_block(slow);
+
+        self.b.switch_to_block(fast);
+        let h = self.hull4(a, b, true);
+        let h = self.vempty_if(a.0, b.0, h);
+        self.b.ins().jump(join, &[BlockArg::Value(h)]);
+
+        self.b.switch_to_block(slow);
+        let (alo, ahi) = self.iv_bounds(a);
+        let (blo, bhi) = self.iv_bounds(b);
+        let call = self
+            .b
+            .ins()
+            .call(self.shims.interval_binary[2], &[alo, ahi, blo, bhi]);
+        let res = self.b.inst_results(call).to_vec();
+        let q = self.iv_from_bounds(res[0], res[1]);
+        self.b.ins().jump(join, &[BlockArg::Value(q.0)]);
+
+        self.b.seal_block(join);
+        self.b.switch_to_block(join);
+        Iv(r)
     }
 
-    /// `Interval::abs` (EMPTY stays EMPTY).
+    /// `Interval::abs`: lanes `(min(0, min(n, h)), max(h, n))`.
     pub fn iv_abs(&mut self, a: Iv) -> Iv {
-        let r = self.iv_abs_nonempty(a);
-        let e = self.is_empty(a);
-        self.empty_if(e, r)
+        let s = self.swap(a.0);
+        let lo = self.vmin(a.0, s);
+        let hi = self.vmax(a.0, s);
+        let r = self.blend(lo, hi);
+        let c = self.vconst(0.0, f64::INFINITY);
+        Iv(self.vmin(c, r))
     }
 
-    /// `Interval::abs` for a non-EMPTY operand (for EMPTY it gives
-    /// `[0, NaN]`): square and powi test emptiness once themselves.
-    fn iv_abs_nonempty(&mut self, a: Iv) -> Iv {
-        let z = self.c(0.0);
-        let nonneg = self.fcmp(FloatCC::GreaterThanOrEqual, a.lo, z);
-        let nonpos = self.fcmp(FloatCC::LessThanOrEqual, a.hi, z);
-        let nlo = self.neg(a.lo);
-        let nhi = self.neg(a.hi);
-        let straddle_hi = self.max_nan(nlo, a.hi);
-        let lo2 = self.select(nonpos, nhi, z);
-        let hi2 = self.select(nonpos, nlo, straddle_hi);
-        Iv {
-            lo: self.select(nonneg, a.lo, lo2),
-            hi: self.select(nonneg, a.hi, hi2),
-        }
-    }
-
+    /// `Interval::square`: `up(r·|r|)` of the `abs` lanes, lane 0 clamped
+    /// at 0 (lane 1 of the clamp constant, +inf, leaves lane 1 alone).
     pub fn iv_square(&mut self, a: Iv) -> Iv {
-        let m = self.iv_abs_nonempty(a);
-        let l = self.mul(m.lo, m.lo);
-        let l = self.next_down(l);
-        let h = self.mul(m.hi, m.hi);
-        let r = Iv {
-            lo: self.clamp0(l),
-            hi: self.next_up(h),
-        };
-        let e = self.is_empty(a);
-        self.empty_if(e, r)
+        let r = self.iv_abs(a);
+        let m = self.b.ins().fabs(r.0);
+        let p = self.b.ins().fmul(r.0, m);
+        let u = self.vup(p);
+        let c = self.vconst(0.0, f64::INFINITY);
+        Iv(self.vmin(c, u))
     }
 
+    /// `Interval::sqrt`.
     pub fn iv_sqrt(&mut self, a: Iv) -> Iv {
-        let z = self.c(0.0);
-        let s = self.b.ins().sqrt(a.lo);
-        let s = self.next_down(s);
-        let s = self.clamp0(s);
-        let lo_le0 = self.fcmp(FloatCC::LessThanOrEqual, a.lo, z);
-        let lo = self.select(lo_le0, z, s);
-        let h = self.b.ins().sqrt(a.hi);
-        let r = Iv {
-            lo,
-            hi: self.next_up(h),
-        };
-        let e = self.is_empty(a);
-        let neg = self.fcmp(FloatCC::LessThan, a.hi, z);
-        let e = self.b.ins().bor(e, neg);
-        self.empty_if(e, r)
+        let x = self.flip_lo(a.0); // (lo, hi)
+        let c = self.vconst(0.0, f64::NEG_INFINITY);
+        let x = self.vmax(c, x); // (mx(0, lo), hi)
+        let s = self.b.ins().sqrt(x);
+        let s = self.flip_lo(s);
+        let u = self.vup(s);
+        let c = self.vconst(0.0, f64::INFINITY);
+        let r = self.vmin(c, u);
+        Iv(self.vempty_if(r, r, r))
     }
 
+    /// `Interval::min`: lanes `(max(-lo), min(hi))`, NaN lane-wise.
     pub fn iv_min(&mut self, a: Iv, b: Iv) -> Iv {
-        Iv {
-            lo: self.min_nan(a.lo, b.lo),
-            hi: self.min_nan(a.hi, b.hi),
-        }
+        let x = self.vmax(a.0, b.0);
+        let y = self.vmin(a.0, b.0);
+        let r = self.blend(x, y);
+        Iv(self.vnan_if(a.0, b.0, r))
     }
 
+    /// `Interval::max`: lanes `(min(-lo), max(hi))`, NaN lane-wise.
     pub fn iv_max(&mut self, a: Iv, b: Iv) -> Iv {
-        Iv {
-            lo: self.max_nan(a.lo, b.lo),
-            hi: self.max_nan(a.hi, b.hi),
-        }
+        let x = self.vmin(a.0, b.0);
+        let y = self.vmax(a.0, b.0);
+        let r = self.blend(x, y);
+        Iv(self.vnan_if(a.0, b.0, r))
     }
 
-    /// Hull of two intervals ignoring an EMPTY one (EMPTY only if both are).
+    /// `Interval::hull`: lane-wise max, skipping a NaN lane of `b`.
     pub fn iv_hull(&mut self, a: Iv, b: Iv) -> Iv {
-        Iv {
-            lo: self.min_ign(a.lo, b.lo),
-            hi: self.max_ign(a.hi, b.hi),
-        }
+        let m = self.vmax(a.0, b.0);
+        let b_nan = self.vcmp(FloatCC::Unordered, b.0, b.0);
+        Iv(self.b.ins().bitselect(b_nan, a.0, m))
     }
 
-    /// `interval::powi_unsigned` unrolled for the constant `n`, with
-    /// `round` applied after each multiplication.
-    fn pow_unrolled(&mut self, x: Value, mut n: u64, round: Round) -> Value {
+    /// `interval::pow_up` on both lanes, unrolled for the constant `n`.
+    fn vpow_up(&mut self, v: Value, mut n: u64) -> Value {
+        let mut result: Option<Value> = None;
+        let mut base = v;
+        while n > 0 {
+            if n & 1 == 1 {
+                result = Some(match result {
+                    None => base,
+                    Some(r) => {
+                        let m = self.b.ins().fabs(base);
+                        let p = self.b.ins().fmul(r, m);
+                        self.vup(p)
+                    }
+                });
+            }
+            n >>= 1;
+            if n > 0 {
+                let m = self.b.ins().fabs(base);
+                let p = self.b.ins().fmul(base, m);
+                base = self.vup(p);
+            }
+        }
+        result.unwrap_or_else(|| self.vconst(1.0, 1.0))
+    }
+
+    /// `interval::powi_unsigned` unrolled for the constant `n`, in
+    /// round-to-nearest (the point semantics).
+    fn pow_unrolled(&mut self, x: Value, mut n: u64) -> Value {
         let mut result: Option<Value> = None;
         let mut base = x;
         while n > 0 {
             if n & 1 == 1 {
                 result = Some(match result {
                     None => base,
-                    Some(r) => {
-                        let p = self.mul(r, base);
-                        self.round(p, round)
-                    }
+                    Some(r) => self.mul(r, base),
                 });
             }
             n >>= 1;
             if n > 0 {
-                let p = self.mul(base, base);
-                base = self.round(p, round);
+                base = self.mul(base, base);
             }
         }
         match result {
@@ -473,21 +521,10 @@ impl Emitter<'_, '_> {
         }
     }
 
-    fn round(&mut self, v: Value, round: Round) -> Value {
-        match round {
-            Round::Nearest => v,
-            Round::Up => self.next_up(v),
-            Round::DownNonNeg => {
-                let d = self.next_down(v);
-                self.clamp0(d)
-            }
-        }
-    }
-
     /// `interval::powi_point` for the constant `n` (widened to i64 so that
     /// the gradient's `n - 1` cannot overflow).
     pub fn powi_point(&mut self, x: Value, n: i64) -> Value {
-        let p = self.pow_unrolled(x, n.unsigned_abs(), Round::Nearest);
+        let p = self.pow_unrolled(x, n.unsigned_abs());
         if n < 0 {
             let one = self.c(1.0);
             self.div(one, p)
@@ -503,37 +540,18 @@ impl Emitter<'_, '_> {
         }
         let m = n.unsigned_abs();
         let p = if m.is_multiple_of(2) {
-            let s = self.iv_abs_nonempty(a);
-            Iv {
-                lo: self.pow_unrolled(s.lo, m, Round::DownNonNeg),
-                hi: self.pow_unrolled(s.hi, m, Round::Up),
-            }
+            let r = self.iv_abs(a);
+            let p = self.vpow_up(r.0, m);
+            let c = self.vconst(0.0, f64::INFINITY);
+            Iv(self.vmin(c, p))
         } else {
-            // Odd powers are increasing: each bound keeps its sign.
-            let z = self.c(0.0);
-            let lo_pos = self.pow_unrolled(a.lo, m, Round::DownNonNeg);
-            let nlo = self.neg(a.lo);
-            let lo_neg = self.pow_unrolled(nlo, m, Round::Up);
-            let lo_neg = self.neg(lo_neg);
-            let lo_ge0 = self.fcmp(FloatCC::GreaterThanOrEqual, a.lo, z);
-            let hi_pos = self.pow_unrolled(a.hi, m, Round::Up);
-            let nhi = self.neg(a.hi);
-            let hi_neg = self.pow_unrolled(nhi, m, Round::DownNonNeg);
-            let hi_neg = self.neg(hi_neg);
-            let hi_ge0 = self.fcmp(FloatCC::GreaterThanOrEqual, a.hi, z);
-            Iv {
-                lo: self.select(lo_ge0, lo_pos, lo_neg),
-                hi: self.select(hi_ge0, hi_pos, hi_neg),
-            }
+            Iv(self.vpow_up(a.0, m))
         };
-        let p = if n < 0 {
+        if n < 0 {
             let one = self.iv_const(1.0);
-            self.iv_div(one, p)
-        } else {
-            p
-        };
-        let e = self.is_empty(a);
-        self.empty_if(e, p)
+            return self.iv_div(one, p);
+        }
+        p
     }
 
     /// A point transcendental through its shim.
@@ -551,31 +569,20 @@ impl Emitter<'_, '_> {
     /// arguments and come back as two f64 results (xmm0, xmm1), which is
     /// the C ABI of a returned `#[repr(C)]` pair of doubles.
     pub fn call_iv_unary(&mut self, i: usize, a: Iv) -> Iv {
-        let call = self
-            .b
-            .ins()
-            .call(self.shims.interval_unary[i], &[a.lo, a.hi]);
-        let r = self.b.inst_results(call);
-        Iv { lo: r[0], hi: r[1] }
+        let (lo, hi) = self.iv_bounds(a);
+        let call = self.b.ins().call(self.shims.interval_unary[i], &[lo, hi]);
+        let r = self.b.inst_results(call).to_vec();
+        self.iv_from_bounds(r[0], r[1])
     }
 
     pub fn call_iv_binary(&mut self, i: usize, a: Iv, b: Iv) -> Iv {
+        let (alo, ahi) = self.iv_bounds(a);
+        let (blo, bhi) = self.iv_bounds(b);
         let call = self
             .b
             .ins()
-            .call(self.shims.interval_binary[i], &[a.lo, a.hi, b.lo, b.hi]);
-        let r = self.b.inst_results(call);
-        Iv { lo: r[0], hi: r[1] }
+            .call(self.shims.interval_binary[i], &[alo, ahi, blo, bhi]);
+        let r = self.b.inst_results(call).to_vec();
+        self.iv_from_bounds(r[0], r[1])
     }
-}
-
-/// Rounding after each step of an unrolled power.
-#[derive(Copy, Clone, Debug)]
-enum Round {
-    /// Plain round-to-nearest (the point semantics).
-    Nearest,
-    /// One ulp up: an upper bound.
-    Up,
-    /// One ulp down, clamped at 0: a lower bound of a non-negative power.
-    DownNonNeg,
 }

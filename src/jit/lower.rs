@@ -93,7 +93,8 @@ pub(crate) trait Spill: Copy {
     fn rebuild(&self, vals: &mut dyn Iterator<Item = Value>) -> Self;
 }
 
-/// Most f64 one lowered value holds (an interval and three partials).
+/// Most f64 one lowered value holds (an interval and three partials; a
+/// packed interval counts as two).
 const MAX_PARTS: i32 = 8;
 
 impl Spill for Value {
@@ -107,13 +108,10 @@ impl Spill for Value {
 
 impl Spill for Iv {
     fn parts(&self, out: &mut Vec<Value>) {
-        out.push(self.lo);
-        out.push(self.hi);
+        out.push(self.0);
     }
     fn rebuild(&self, vals: &mut dyn Iterator<Item = Value>) -> Self {
-        let lo = vals.next().expect("lo");
-        let hi = vals.next().expect("hi");
-        Iv { lo, hi }
+        Iv(vals.next().expect("lanes"))
     }
 }
 
@@ -164,9 +162,10 @@ fn sweep<T: Spill>(
                     t.parts(&mut parts);
                     let loaded: Vec<Value> = parts
                         .iter()
-                        .map(|_| {
-                            let v = e.b.ins().stack_load(types::I64, types::F64, ss, off);
-                            off += 8;
+                        .map(|&p| {
+                            let ty = e.b.func.dfg.value_type(p);
+                            let v = e.b.ins().stack_load(types::I64, ty, ss, off);
+                            off += ty.bytes() as i32;
                             v
                         })
                         .collect();
@@ -188,9 +187,10 @@ fn sweep<T: Spill>(
         if let (Some(ss), Some(s)) = (ss, plan.slot[i]) {
             parts.clear();
             r.parts(&mut parts);
-            for (k, &p) in parts.iter().enumerate() {
-                e.b.ins()
-                    .stack_store(types::I64, p, ss, s as i32 * 8 * MAX_PARTS + 8 * k as i32);
+            let mut off = s as i32 * 8 * MAX_PARTS;
+            for &p in &parts {
+                e.b.ins().stack_store(types::I64, p, ss, off);
+                off += e.b.func.dfg.value_type(p).bytes() as i32;
             }
         }
         vals[i] = Some((r, i));
@@ -253,6 +253,16 @@ pub(crate) fn interval(e: &mut Emitter, f: &Function, live: &[bool], b: [Iv; 3])
         |e, op, a| match *op {
             Op::Const(c) => e.iv_const(c),
             Op::Unary(u, _) => iv_unary(e, u, a[0]),
+            Op::Binary(BinaryOp::Mul, x, y) => {
+                let konst = |v: crate::ir::ValueId| match f.ops[v.index()] {
+                    Op::Const(c) => Some(c),
+                    _ => None,
+                };
+                match (konst(x), konst(y)) {
+                    (Some(c), _) => e.iv_mul(a[1], a[0], Some(c)),
+                    (_, c) => e.iv_mul(a[0], a[1], c),
+                }
+            }
             Op::Binary(o, _, _) => iv_binary(e, o, a[0], a[1]),
             Op::Powi(_, n) => e.iv_powi(a[0], i64::from(n)),
             Op::Var(v) => b[v.index()],
@@ -277,7 +287,7 @@ fn iv_binary(e: &mut Emitter, op: BinaryOp, a: Iv, b: Iv) -> Iv {
     match op {
         BinaryOp::Add => e.iv_add(a, b),
         BinaryOp::Sub => e.iv_sub(a, b),
-        BinaryOp::Mul => e.iv_mul(a, b),
+        BinaryOp::Mul => e.iv_mul(a, b, None),
         BinaryOp::Div => e.iv_div(a, b),
         BinaryOp::Min => e.iv_min(a, b),
         BinaryOp::Max => e.iv_max(a, b),
@@ -372,7 +382,7 @@ impl Num for Iv {
         e.iv_sub(a, b)
     }
     fn mul(e: &mut Emitter, a: Self, b: Self) -> Self {
-        e.iv_mul(a, b)
+        e.iv_mul(a, b, None)
     }
     fn div(e: &mut Emitter, a: Self, b: Self) -> Self {
         e.iv_div(a, b)
@@ -390,24 +400,30 @@ impl Num for Iv {
         e.iv_powi(a, n)
     }
     fn abs_grad(e: &mut Emitter, a: Self, da: Self) -> Self {
-        // The sign of a is certain only when a.lo >= 0 or a.hi < 0.
+        // The sign of a is certain only when a.lo >= 0 (lane -lo <= 0) or
+        // a.hi < 0.
         let z = e.c(0.0);
-        let nonneg = e.fcmp(FloatCC::GreaterThanOrEqual, a.lo, z);
-        let neg = e.fcmp(FloatCC::LessThan, a.hi, z);
+        let (n, h) = e.iv_lanes(a);
+        let nonneg = e.fcmp(FloatCC::LessThanOrEqual, n, z);
+        let neg = e.fcmp(FloatCC::LessThan, h, z);
         let nda = e.iv_neg(da);
         let both = e.iv_hull(da, nda);
         pick(e, nonneg, da, neg, nda, both)
     }
     fn min_grad(e: &mut Emitter, a: Self, b: Self, da: Self, db: Self) -> Self {
         // a < b everywhere iff a.hi < b.lo; nowhere iff b.hi <= a.lo.
-        let a_first = e.fcmp(FloatCC::LessThan, a.hi, b.lo);
-        let b_first = e.fcmp(FloatCC::LessThanOrEqual, b.hi, a.lo);
+        let (alo, ahi) = bounds(e, a);
+        let (blo, bhi) = bounds(e, b);
+        let a_first = e.fcmp(FloatCC::LessThan, ahi, blo);
+        let b_first = e.fcmp(FloatCC::LessThanOrEqual, bhi, alo);
         let both = e.iv_hull(da, db);
         pick(e, a_first, da, b_first, db, both)
     }
     fn max_grad(e: &mut Emitter, a: Self, b: Self, da: Self, db: Self) -> Self {
-        let a_first = e.fcmp(FloatCC::GreaterThan, a.lo, b.hi);
-        let b_first = e.fcmp(FloatCC::LessThanOrEqual, a.hi, b.lo);
+        let (alo, ahi) = bounds(e, a);
+        let (blo, bhi) = bounds(e, b);
+        let a_first = e.fcmp(FloatCC::GreaterThan, alo, bhi);
+        let b_first = e.fcmp(FloatCC::LessThanOrEqual, ahi, blo);
         let both = e.iv_hull(da, db);
         pick(e, a_first, da, b_first, db, both)
     }
@@ -417,28 +433,28 @@ impl Num for Iv {
     /// exactly zero never reach here: they stay zero, as in the reference.)
     fn atan2_cut(e: &mut Emitter, a: Self, b: Self, d: Self) -> Self {
         let z = e.c(0.0);
-        let b_nonpos = e.fcmp(FloatCC::LessThanOrEqual, b.lo, z);
-        let a_lo = e.fcmp(FloatCC::LessThanOrEqual, a.lo, z);
-        let a_hi = e.fcmp(FloatCC::LessThanOrEqual, z, a.hi);
+        let (alo, ahi) = bounds(e, a);
+        let (blo, _) = bounds(e, b);
+        let b_nonpos = e.fcmp(FloatCC::LessThanOrEqual, blo, z);
+        let a_lo = e.fcmp(FloatCC::LessThanOrEqual, alo, z);
+        let a_hi = e.fcmp(FloatCC::LessThanOrEqual, z, ahi);
         let a_has0 = e.b.ins().band(a_lo, a_hi);
         let cut = e.b.ins().band(b_nonpos, a_has0);
-        let ninf = e.c(f64::NEG_INFINITY);
-        let pinf = e.c(f64::INFINITY);
-        Iv {
-            lo: e.select(cut, ninf, d.lo),
-            hi: e.select(cut, pinf, d.hi),
-        }
+        let entire = Iv(e.vconst(f64::INFINITY, f64::INFINITY));
+        e.iv_select(cut, entire, d)
     }
+}
+
+/// The bounds `(lo, hi)` of an interval as scalars.
+fn bounds(e: &mut Emitter, a: Iv) -> (Value, Value) {
+    let (n, h) = e.iv_lanes(a);
+    (e.neg(n), h)
 }
 
 /// `if c1 { r1 } else if c2 { r2 } else { r3 }`.
 fn pick(e: &mut Emitter, c1: Value, r1: Iv, c2: Value, r2: Iv, r3: Iv) -> Iv {
-    let lo = e.select(c2, r2.lo, r3.lo);
-    let hi = e.select(c2, r2.hi, r3.hi);
-    Iv {
-        lo: e.select(c1, r1.lo, lo),
-        hi: e.select(c1, r1.hi, hi),
-    }
+    let r = e.iv_select(c2, r2, r3);
+    e.iv_select(c1, r1, r)
 }
 
 /// A value with its three partial derivatives (`None` = exactly zero).

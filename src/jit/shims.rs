@@ -46,6 +46,10 @@ extern "C" fn interval_pow(alo: f64, ahi: f64, blo: f64, bhi: f64) -> Interval {
     Interval::new(alo, ahi).pow(Interval::new(blo, bhi))
 }
 
+extern "C" fn interval_div_zero(alo: f64, ahi: f64, blo: f64, bhi: f64) -> Interval {
+    Interval::new(alo, ahi).div_by_zero_part(Interval::new(blo, bhi))
+}
+
 /// Shape of a shim's signature.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 pub(crate) enum ShimSig {
@@ -61,7 +65,7 @@ pub(crate) enum ShimSig {
 
 /// Every shim: symbol name, signature shape, address. The order within each
 /// shape is the order of the arrays in `emit::ShimRefs`.
-pub(crate) fn all() -> [(&'static str, ShimSig, *const u8); 12] {
+pub(crate) fn all() -> [(&'static str, ShimSig, *const u8); 13] {
     use ShimSig::*;
     [
         ("ibeam_point_exp", PointUnary, point_exp as *const u8),
@@ -95,6 +99,11 @@ pub(crate) fn all() -> [(&'static str, ShimSig, *const u8); 12] {
             "ibeam_interval_pow",
             IntervalBinary,
             interval_pow as *const u8,
+        ),
+        (
+            "ibeam_interval_div_zero",
+            IntervalBinary,
+            interval_div_zero as *const u8,
         ),
     ]
 }
