@@ -496,18 +496,17 @@ fn run_grad(ops: &[Op], p: [f64; 3], vals: &mut Vec<Grad>) {
     }
 }
 
-fn run_igrad(ops: &[Op], b: [Interval; 3], vals: &mut Vec<IntervalGrad>) {
+/// Forward mode over a box; the partials of coordinate k start as
+/// `seed[k]` (unit vectors for the gradient, `[v_k, 0, 0]` for the
+/// derivative along v).
+fn run_igrad(ops: &[Op], b: [Interval; 3], seed: [[Interval; 3]; 3], vals: &mut Vec<IntervalGrad>) {
     vals.clear();
     for op in ops {
         let v = match *op {
-            Op::Var(var) => {
-                let mut d = [Interval::point(0.0); 3];
-                d[var.index()] = Interval::point(1.0);
-                IntervalGrad {
-                    v: b[var.index()],
-                    d,
-                }
-            }
+            Op::Var(var) => IntervalGrad {
+                v: b[var.index()],
+                d: seed[var.index()],
+            },
             Op::Const(c) => IntervalGrad {
                 v: Interval::point(c),
                 d: [Interval::point(0.0); 3],
@@ -543,9 +542,21 @@ impl Evaluator for Interpreter {
     }
 
     fn interval_grad(&self, b: [Interval; 3]) -> IntervalGrad {
+        let (o, z) = (Interval::point(1.0), Interval::point(0.0));
+        let unit = [[o, z, z], [z, o, z], [z, z, o]];
         SCRATCH.with_borrow_mut(|s| {
-            run_igrad(&self.f.ops, b, &mut s.igrad);
+            run_igrad(&self.f.ops, b, unit, &mut s.igrad);
             s.igrad[self.f.root.index()]
+        })
+    }
+
+    fn interval_dir(&self, b: [Interval; 3], v: [Interval; 3]) -> [Interval; 2] {
+        let z = Interval::point(0.0);
+        let seed = v.map(|vk| [vk, z, z]);
+        SCRATCH.with_borrow_mut(|s| {
+            run_igrad(&self.f.ops, b, seed, &mut s.igrad);
+            let r = s.igrad[self.f.root.index()];
+            [r.v, r.d[0]]
         })
     }
 }

@@ -468,11 +468,38 @@ pub(crate) fn grad<T: Num + Spill>(
     live: &[bool],
     xyz: [T; 3],
 ) -> Dual<T> {
-    let var = |e: &mut Emitter, k: usize| {
+    let unit = |e: &mut Emitter, k: usize| {
         let mut d = [None; 3];
         d[k] = Some(T::konst(e, 1.0));
-        (xyz[k], d)
+        d
     };
+    seeded(e, f, live, xyz, &unit)
+}
+
+/// Forward-mode value and directional derivative `∇f·v` of f (in partial
+/// slot 0): each coordinate's derivative is seeded with its component of
+/// `v`, so one partial is carried instead of three.
+pub(crate) fn directional<T: Num + Spill>(
+    e: &mut Emitter,
+    f: &Function,
+    live: &[bool],
+    xyz: [T; 3],
+    v: [T; 3],
+) -> (T, Option<T>) {
+    let seed = |_: &mut Emitter, k: usize| [Some(v[k]), None, None];
+    let (val, d) = seeded(e, f, live, xyz, &seed);
+    (val, d[0])
+}
+
+/// Forward mode with the partials of the coordinate `k` seeded by `seed(k)`.
+fn seeded<T: Num + Spill>(
+    e: &mut Emitter,
+    f: &Function,
+    live: &[bool],
+    xyz: [T; 3],
+    seed: &dyn Fn(&mut Emitter, usize) -> [Option<T>; 3],
+) -> Dual<T> {
+    let var = |e: &mut Emitter, k: usize| (xyz[k], seed(e, k));
     sweep(e, f, live, var, |e, op, a| match *op {
         Op::Const(c) => (T::konst(e, c), [None; 3]),
         Op::Unary(u, _) => grad_unary(e, u, a[0]),

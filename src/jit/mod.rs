@@ -77,6 +77,8 @@ pub enum Kind {
     Interval,
     /// Intervals of f and its gradient over a box.
     IntervalGrad,
+    /// Intervals of f and of its derivative along a direction over a box.
+    IntervalDir,
     /// f at many points (a loop around the point body).
     PointBatch,
     /// Intervals of f over many boxes.
@@ -85,11 +87,12 @@ pub enum Kind {
 
 impl Kind {
     /// Every kind, in the order of [`clif_text`] and [`JitEvaluator::compile_times`].
-    pub const ALL: [Kind; 6] = [
+    pub const ALL: [Kind; 7] = [
         Kind::Point,
         Kind::PointGrad,
         Kind::Interval,
         Kind::IntervalGrad,
+        Kind::IntervalDir,
         Kind::PointBatch,
         Kind::IntervalBatch,
     ];
@@ -101,6 +104,7 @@ impl Kind {
             Kind::PointGrad => "point_grad",
             Kind::Interval => "interval",
             Kind::IntervalGrad => "interval_grad",
+            Kind::IntervalDir => "interval_dir",
             Kind::PointBatch => "point_batch",
             Kind::IntervalBatch => "interval_batch",
         }
@@ -110,7 +114,7 @@ impl Kind {
         match self {
             Kind::Point => PointFn::signature(cc),
             Kind::PointGrad => PointGradFn::signature(cc),
-            Kind::Interval | Kind::IntervalGrad => IntervalFn::signature(cc),
+            Kind::Interval | Kind::IntervalGrad | Kind::IntervalDir => IntervalFn::signature(cc),
             Kind::PointBatch => PointBatchFn::signature(cc),
             Kind::IntervalBatch => IntervalBatchFn::signature(cc),
         }
@@ -273,6 +277,21 @@ fn build(
                 let dk = dk.unwrap_or_else(|| e.iv_const(0.0));
                 e.iv_store(dk, out, 16 * (k as i32 + 1));
             }
+            b.ins().return_(&[]);
+        }
+        Kind::IntervalDir => {
+            let mut e = Emitter {
+                b: &mut b,
+                shims,
+                int_select,
+            };
+            let bx = load_box(&mut e, params[0]);
+            let dir = [0, 1, 2].map(|k| e.iv_load(params[0], 48 + 16 * k));
+            let (v, d) = lower::directional(&mut e, f, live, bx, dir);
+            let out = params[1];
+            e.iv_store(v, out, 0);
+            let d = d.unwrap_or_else(|| e.iv_const(0.0));
+            e.iv_store(d, out, 16);
             b.ins().return_(&[]);
         }
         Kind::PointBatch | Kind::IntervalBatch => {
@@ -448,6 +467,7 @@ pub struct JitEvaluator {
     point_grad: OnceLock<Slot<PointGradFn>>,
     interval: OnceLock<Slot<IntervalFn>>,
     interval_grad: OnceLock<Slot<IntervalFn>>,
+    interval_dir: OnceLock<Slot<IntervalFn>>,
     point_batch: OnceLock<Slot<PointBatchFn>>,
     interval_batch: OnceLock<Slot<IntervalBatchFn>>,
 }
@@ -483,6 +503,7 @@ impl JitEvaluator {
             point_grad: OnceLock::new(),
             interval: OnceLock::new(),
             interval_grad: OnceLock::new(),
+            interval_dir: OnceLock::new(),
             point_batch: OnceLock::new(),
             interval_batch: OnceLock::new(),
         })
@@ -502,6 +523,7 @@ impl JitEvaluator {
             Kind::PointGrad => info(&self.point_grad),
             Kind::Interval => info(&self.interval),
             Kind::IntervalGrad => info(&self.interval_grad),
+            Kind::IntervalDir => info(&self.interval_dir),
             Kind::PointBatch => info(&self.point_batch),
             Kind::IntervalBatch => info(&self.interval_batch),
         }
@@ -523,6 +545,7 @@ impl JitEvaluator {
             Kind::PointGrad => drop(get(&self.point_grad, kind, f, l)),
             Kind::Interval => drop(get(&self.interval, kind, f, l)),
             Kind::IntervalGrad => drop(get(&self.interval_grad, kind, f, l)),
+            Kind::IntervalDir => drop(get(&self.interval_dir, kind, f, l)),
             Kind::PointBatch => drop(get(&self.point_batch, kind, f, l)),
             Kind::IntervalBatch => drop(get(&self.interval_batch, kind, f, l)),
         }
@@ -580,6 +603,13 @@ impl Evaluator for JitEvaluator {
                 v: Interval::ENTIRE,
                 d: [Interval::ENTIRE; 3],
             },
+        }
+    }
+
+    fn interval_dir(&self, b: [Interval; 3], v: [Interval; 3]) -> [Interval; 2] {
+        match get(&self.interval_dir, Kind::IntervalDir, &self.f, &self.live) {
+            Some(c) => c.call_interval_dir(&[b[0], b[1], b[2], v[0], v[1], v[2]]),
+            None => [Interval::ENTIRE; 2],
         }
     }
 

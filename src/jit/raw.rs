@@ -180,6 +180,17 @@ impl Code<IntervalFn> {
         Interval::new(out[0], out[1])
     }
 
+    /// F and its derivative along a direction over a box (`bv` is the box
+    /// then the direction).
+    pub(crate) fn call_interval_dir(&self, bv: &[Interval; 6]) -> [Interval; 2] {
+        let mut out = [0.0; 4];
+        // SAFETY: `Interval` is `repr(C)` of two f64, so `[Interval; 6]` is
+        // the 12 aligned f64 the directional kind reads; it writes 4 f64,
+        // which `out` holds.
+        unsafe { (self.entry)(bv.as_ptr().cast::<f64>(), out.as_mut_ptr()) };
+        [Interval::new(out[0], out[1]), Interval::new(out[2], out[3])]
+    }
+
     /// F and its partials over the box.
     pub(crate) fn call_interval_grad(&self, b: &[Interval; 3]) -> IntervalGrad {
         let out = self.run(b);

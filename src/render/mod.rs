@@ -283,6 +283,18 @@ impl Tracer<'_> {
         st.interval_evals += 1;
         self.evals[k].interval_grad(b)
     }
+    /// F and its derivative along `v` over `b` (see
+    /// [`Evaluator::interval_dir`]).
+    pub(crate) fn interval_dir(
+        &self,
+        k: usize,
+        b: IBox,
+        v: IBox,
+        st: &mut RenderStats,
+    ) -> [Interval; 2] {
+        st.interval_evals += 1;
+        self.evals[k].interval_dir(b, v)
+    }
     pub(crate) fn point(&self, k: usize, p: [f64; 3], st: &mut RenderStats) -> f64 {
         st.point_evals += 1;
         self.evals[k].point(p)

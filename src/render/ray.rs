@@ -250,8 +250,7 @@ fn centred_positive(
     b: f64,
     st: &mut RenderStats,
 ) -> bool {
-    let g = tr.interval_grad(k, bx, st);
-    let dfdt = (0..3).fold(Interval::point(0.0), |acc, i| acc.add(g.d[i].mul(ray.d[i])));
+    let [_, dfdt] = tr.interval_dir(k, bx, ray.d, st);
     if dfdt.is_empty() || !dfdt.lo.is_finite() || !dfdt.hi.is_finite() {
         return false;
     }
@@ -319,11 +318,7 @@ fn newton(
     st: &mut RenderStats,
 ) -> Newton {
     let bx = ray_box(ray.o, ray.d, Interval::new(a, b));
-    let g = tr.interval_grad(k, bx, st);
-    let mut dfdt = Interval::point(0.0);
-    for i in 0..3 {
-        dfdt = dfdt.add(g.d[i].mul(ray.d[i]));
-    }
+    let [_, dfdt] = tr.interval_dir(k, bx, ray.d, st);
     if dfdt.is_empty() || dfdt.contains(0.0) || !dfdt.lo.is_finite() || !dfdt.hi.is_finite() {
         return Newton::Shrunk(a, b);
     }

@@ -133,14 +133,9 @@ pub(crate) fn segment_free(
             }
         };
         if ok {
-            let increasing = maybe.iter().all(|&k| {
-                let g = tr.interval_grad(k, bx, st);
-                let dd =
-                    g.d.iter()
-                        .zip(&delta)
-                        .fold(Interval::point(0.0), |acc, (gi, di)| acc.add(gi.mul(*di)));
-                dd.lo > 0.0
-            });
+            let increasing = maybe
+                .iter()
+                .all(|&k| tr.interval_dir(k, bx, delta, st)[1].lo > 0.0);
             if increasing {
                 front_ok = Some(inside_bounds);
                 continue;
