@@ -73,6 +73,36 @@ pub(crate) struct Emitter<'a, 'b> {
     pub shims: ShimRefs,
     /// Emit float selects as integer selects (see [`Self::select`]).
     pub int_select: bool,
+    /// Recently built packed constants (see [`Self::vconst`]).
+    consts: Vec<RecentConst>,
+    /// Packed constants built so far (the age of a cached one).
+    const_clock: u32,
+}
+
+/// A packed constant built in `block` at `const_clock` time `at`.
+struct RecentConst {
+    bits: (u64, u64),
+    value: Value,
+    block: cranelift_codegen::ir::Block,
+    at: u32,
+}
+
+/// A packed constant is reused for this many later constant requests
+/// (a few ops' worth), then rebuilt: reuse saves a constant-pool load per
+/// use, and the bound keeps its live range short, which the register
+/// allocator needs in large functions (see `lower::WINDOW`).
+const CONST_REUSE: u32 = 40;
+
+impl<'a, 'b> Emitter<'a, 'b> {
+    pub fn new(b: &'a mut FunctionBuilder<'b>, shims: ShimRefs, int_select: bool) -> Self {
+        Emitter {
+            b,
+            shims,
+            int_select,
+            consts: Vec::new(),
+            const_clock: 0,
+        }
+    }
 }
 
 impl Emitter<'_, '_> {
@@ -168,8 +198,32 @@ impl Emitter<'_, '_> {
 
     // ---- packed intervals -------------------------------------------
 
-    /// An `F64X2` constant with lanes `(l0, l1)`.
+    /// An `F64X2` constant with lanes `(l0, l1)`, reused if the same one
+    /// was built recently in the current block.
     pub fn vconst(&mut self, l0: f64, l1: f64) -> Value {
+        let bits = (l0.to_bits(), l1.to_bits());
+        let block = self.b.current_block().expect("inside a block");
+        self.const_clock += 1;
+        let now = self.const_clock;
+        self.consts.retain(|c| now - c.at <= CONST_REUSE);
+        if let Some(c) = self
+            .consts
+            .iter()
+            .find(|c| c.bits == bits && c.block == block)
+        {
+            return c.value;
+        }
+        let value = self.vconst_fresh(l0, l1);
+        self.consts.push(RecentConst {
+            bits,
+            value,
+            block,
+            at: now,
+        });
+        value
+    }
+
+    fn vconst_fresh(&mut self, l0: f64, l1: f64) -> Value {
         let mut bytes = l0.to_le_bytes().to_vec();
         bytes.extend_from_slice(&l1.to_le_bytes());
         let c = self.b.func.dfg.constants.insert(ConstantData::from(bytes));
@@ -247,12 +301,20 @@ impl Emitter<'_, '_> {
     pub fn vup(&mut self, v: Value) -> Value {
         let neg_max = self.vconst(-f64::MAX, -f64::MAX);
         let c = self.vmax(neg_max, v);
-        let a = self.b.ins().fabs(c);
+        let a = self.vabs(c);
         let step = self.vconst(f64::EPSILON, f64::EPSILON);
         let tiny = self.vconst(f64::from_bits(1), f64::from_bits(1));
         let t = self.b.ins().fmul(a, step);
         let t = self.vmax(t, tiny);
         self.b.ins().fadd(c, t)
+    }
+
+    /// `|x|` lane-wise, as one `andpd` with a (reused) mask constant
+    /// (Cranelift's `fabs` rebuilds the mask with two instructions).
+    fn vabs(&mut self, x: Value) -> Value {
+        let m = f64::from_bits(0x7fff_ffff_ffff_ffff);
+        let m = self.vconst(m, m);
+        self.b.ins().band(x, m)
     }
 
     /// Lane 0 negated: `(-x0, x1)`; turns `[lo, hi]` into lanes and back.
@@ -430,7 +492,7 @@ impl Emitter<'_, '_> {
     /// at 0 (lane 1 of the clamp constant, +inf, leaves lane 1 alone).
     pub fn iv_square(&mut self, a: Iv) -> Iv {
         let r = self.iv_abs(a);
-        let m = self.b.ins().fabs(r.0);
+        let m = self.vabs(r.0);
         let p = self.b.ins().fmul(r.0, m);
         let u = self.vup(p);
         let c = self.vconst(0.0, f64::INFINITY);
@@ -482,7 +544,7 @@ impl Emitter<'_, '_> {
                 result = Some(match result {
                     None => base,
                     Some(r) => {
-                        let m = self.b.ins().fabs(base);
+                        let m = self.vabs(base);
                         let p = self.b.ins().fmul(r, m);
                         self.vup(p)
                     }
@@ -490,7 +552,7 @@ impl Emitter<'_, '_> {
             }
             n >>= 1;
             if n > 0 {
-                let m = self.b.ins().fabs(base);
+                let m = self.vabs(base);
                 let p = self.b.ins().fmul(base, m);
                 base = self.vup(p);
             }

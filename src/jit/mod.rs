@@ -143,6 +143,9 @@ fn isa() -> Result<OwnedTargetIsa, JitError> {
         };
         let lvl = std::env::var("IBEAM_JIT_OPT").unwrap_or_else(|_| "none".into());
         set(&mut flags, "opt_level", &lvl)?;
+        if let Ok(ra) = std::env::var("IBEAM_JIT_RA") {
+            set(&mut flags, "regalloc_algorithm", &ra)?;
+        }
         set(&mut flags, "use_colocated_libcalls", "false")?;
         set(&mut flags, "is_pic", "false")?;
         let verify = if cfg!(debug_assertions) {
@@ -229,20 +232,12 @@ fn build(
     let load_box = |e: &mut Emitter, p: ir::Value| [0, 1, 2].map(|k| e.iv_load(p, 16 * k));
     match kind {
         Kind::Point => {
-            let mut e = Emitter {
-                b: &mut b,
-                shims,
-                int_select,
-            };
+            let mut e = Emitter::new(&mut b, shims, int_select);
             let v = lower::point(&mut e, f, live, [params[0], params[1], params[2]]);
             b.ins().return_(&[v]);
         }
         Kind::PointGrad => {
-            let mut e = Emitter {
-                b: &mut b,
-                shims,
-                int_select,
-            };
+            let mut e = Emitter::new(&mut b, shims, int_select);
             let (v, d) = lower::grad(&mut e, f, live, [params[0], params[1], params[2]]);
             let out = params[3];
             e.store(v, out, 0);
@@ -253,22 +248,14 @@ fn build(
             b.ins().return_(&[]);
         }
         Kind::Interval => {
-            let mut e = Emitter {
-                b: &mut b,
-                shims,
-                int_select,
-            };
+            let mut e = Emitter::new(&mut b, shims, int_select);
             let bx = load_box(&mut e, params[0]);
             let v = lower::interval(&mut e, f, live, bx);
             e.iv_store(v, params[1], 0);
             b.ins().return_(&[]);
         }
         Kind::IntervalGrad => {
-            let mut e = Emitter {
-                b: &mut b,
-                shims,
-                int_select,
-            };
+            let mut e = Emitter::new(&mut b, shims, int_select);
             let bx = load_box(&mut e, params[0]);
             let (v, d) = lower::grad(&mut e, f, live, bx);
             let out = params[1];
@@ -280,11 +267,7 @@ fn build(
             b.ins().return_(&[]);
         }
         Kind::IntervalDir => {
-            let mut e = Emitter {
-                b: &mut b,
-                shims,
-                int_select,
-            };
+            let mut e = Emitter::new(&mut b, shims, int_select);
             let bx = load_box(&mut e, params[0]);
             let dir = [0, 1, 2].map(|k| e.iv_load(params[0], 48 + 16 * k));
             let (v, d) = lower::directional(&mut e, f, live, bx, dir);
@@ -316,19 +299,11 @@ fn build(
                 let off = b.ins().ishl_imm_u(i_param, 3);
                 let addr = |b: &mut FunctionBuilder, base: ir::Value| b.ins().iadd(base, off);
                 let ptrs = [0, 1, 2, 3].map(|k| addr(&mut b, params[k]));
-                let mut e = Emitter {
-                    b: &mut b,
-                    shims,
-                    int_select,
-                };
+                let mut e = Emitter::new(&mut b, shims, int_select);
                 let xyz = [0, 1, 2].map(|k| e.load(ptrs[k], 0));
                 let call = b.ins().call(callee, &xyz);
                 let v = b.inst_results(call)[0];
-                let mut e = Emitter {
-                    b: &mut b,
-                    shims,
-                    int_select,
-                };
+                let mut e = Emitter::new(&mut b, shims, int_select);
                 e.store(v, ptrs[3], 0);
             } else {
                 let in_off = b.ins().imul_imm_u(i_param, 48);
@@ -661,11 +636,7 @@ mod tests {
         b.seal_block(entry);
         let x = b.block_params(entry)[0];
         let int_select = false;
-        let mut e = Emitter {
-            b: &mut b,
-            shims,
-            int_select,
-        };
+        let mut e = Emitter::new(&mut b, shims, int_select);
         let v = emit(&mut e, x);
         b.ins().return_(&[v]);
         b.finalize(fe);
