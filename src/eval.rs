@@ -51,6 +51,13 @@ pub trait Evaluator: Send + Sync {
         [g.v, d]
     }
 
+    /// Time spent so far compiling this evaluator's native code (zero for
+    /// evaluators that compile nothing). Renders subtract what lazy
+    /// compilation adds to their wall time.
+    fn compile_time(&self) -> std::time::Duration {
+        std::time::Duration::ZERO
+    }
+
     /// `out[i] = f(xs[i], ys[i], zs[i])` for every i.
     fn point_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
         for (i, o) in out.iter_mut().enumerate() {

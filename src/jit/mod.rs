@@ -588,6 +588,10 @@ impl Evaluator for JitEvaluator {
         }
     }
 
+    fn compile_time(&self) -> Duration {
+        self.compile_times().iter().map(|(_, t)| *t).sum()
+    }
+
     /// Evaluates `min(len)` points of the four slices in one native loop.
     fn point_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
         match get(&self.point_batch, Kind::PointBatch, &self.f, &self.live) {

@@ -55,7 +55,7 @@ pub struct RenderStats {
     pub aa_cpu_ms: f64,
     /// Render wall time, ms (excludes parsing and compiling).
     pub time_ms: f64,
-    /// Time to build the evaluators, ms (set by the caller).
+    /// Time to build the evaluators and compile their native code, ms.
     pub compile_ms: f64,
     /// Visibility (beams, rays, root refinement), summed over threads, ms.
     pub trace_cpu_ms: f64,
