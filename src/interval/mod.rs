@@ -251,12 +251,14 @@ impl Interval {
     }
 
     /// `self + o`.
+    #[inline]
     pub fn add(self, o: Interval) -> Interval {
         let ((an, ah), (bn, bh)) = (self.lanes(), o.lanes());
         Interval::from_lanes(up(an + bn), up(ah + bh))
     }
 
     /// `self - o`.
+    #[inline]
     pub fn sub(self, o: Interval) -> Interval {
         let ((an, ah), (bn, bh)) = (self.lanes(), o.lanes());
         Interval::from_lanes(up(an + bh), up(ah + bn))
@@ -286,6 +288,7 @@ impl Interval {
 
     /// `self * o`: hull of the four bound products, ignoring the NaN of
     /// 0·inf, each bound then rounded outward; EMPTY if either is.
+    #[inline]
     pub fn mul(self, o: Interval) -> Interval {
         let finite = |i: Interval| i.lo.is_finite() && i.hi.is_finite();
         if finite(self) && finite(o) {
@@ -299,8 +302,8 @@ impl Interval {
                 self.hi * o.lo,
                 self.hi * o.hi,
             ];
-            let lo = p[0].min(p[1]).min(p[2].min(p[3]));
-            let hi = p[0].max(p[1]).max(p[2].max(p[3]));
+            let lo = mn(mn(p[0], p[1]), mn(p[2], p[3]));
+            let hi = mx(mx(p[0], p[1]), mx(p[2], p[3]));
             return Interval::from_lanes(up(-lo), up(hi));
         }
         if self.is_empty() || o.is_empty() {
