@@ -244,3 +244,22 @@ fn jit_and_interp_renders_agree() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn object_undefined_everywhere_is_an_error() {
+    let dir = scratch("undefined");
+    // A plane with a zero normal divides by zero at every point; a square
+    // root of a negative constant part is undefined everywhere too.
+    for (name, body) in [
+        ("plane", "plane(0, 0, 0, 1)"),
+        ("root", "sqrt(-1 - x^2) - 1"),
+    ] {
+        let scene = dir.join(format!("{name}.ib"));
+        std::fs::write(&scene, format!("object {name} = {body};\n")).unwrap();
+        let out = dir.join(format!("{name}.png"));
+        let o = render(&scene, &out, &["--size", "8x8"]);
+        assert_fails(&o, &[&format!("object `{name}`"), "undefined everywhere"]);
+        assert!(!out.exists(), "{name}: no image is written");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -154,6 +154,8 @@ pub enum RenderError {
     Threads(String),
     /// Anti-aliasing parameters out of range.
     BadAa(String),
+    /// An object's function is undefined at every point of the bounds.
+    Undefined(String),
 }
 
 impl std::fmt::Display for RenderError {
@@ -174,6 +176,12 @@ impl std::fmt::Display for RenderError {
             RenderError::BadBounds => write!(f, "scene bounds are empty or not finite"),
             RenderError::Threads(e) => write!(f, "cannot start render threads: {e}"),
             RenderError::BadAa(e) => write!(f, "bad anti-aliasing: {e}"),
+            RenderError::Undefined(name) => write!(
+                f,
+                "object `{name}` is undefined everywhere inside the bounds \
+                 (e.g. a division by zero or the square root of a negative \
+                 number), so it has no surface to draw"
+            ),
         }
     }
 }
@@ -370,6 +378,14 @@ pub fn render_aa(
     let b = scene.bounds;
     if !(0..3).all(|i| b.min[i].is_finite() && b.max[i].is_finite() && b.min[i] <= b.max[i]) {
         return Err(RenderError::BadBounds);
+    }
+    // EMPTY over the whole bounds proves f undefined at every point there:
+    // say so rather than draw an empty image.
+    let whole = camera::bounds_box(&b);
+    for (o, e) in scene.objects.iter().zip(evaluators) {
+        if e.interval(whole).is_empty() {
+            return Err(RenderError::Undefined(o.name.clone()));
+        }
     }
     let cam = RayCamera::new(&scene.camera, w * s, h * s).map_err(RenderError::Camera)?;
     let tr = Tracer {
