@@ -20,7 +20,7 @@ use ibeam::ir::interp::Interpreter;
 use ibeam::ir::passes;
 use ibeam::ir::random::Rng;
 use ibeam::jit::JitEvaluator;
-use ibeam::render::{Method, RenderOptions, render};
+use ibeam::render::{Method, RenderError, RenderOptions, render};
 use ibeam::scene::Scene;
 use proptest::prelude::*;
 
@@ -211,7 +211,19 @@ fn check_scene(seed: u64, text: &str, all_csg: bool, n: usize) {
     check_jit_matches_interp(seed, &scene);
     let evals = evaluators(&scene);
     let mut opts = RenderOptions::new(32, 32);
-    let beam = render(&scene, &evals, &opts).unwrap();
+    let beam = match render(&scene, &evals, &opts) {
+        Ok(out) => out,
+        Err(RenderError::Undefined(name)) => {
+            // Only an object proven undefined on the whole bounds may be
+            // refused.
+            let k = scene.objects.iter().position(|o| o.name == name).unwrap();
+            let b = scene.bounds;
+            let whole = [0, 1, 2].map(|i| Interval::new(b.min[i], b.max[i]));
+            assert!(evals[k].interval(whole).is_empty(), "seed {seed}: {name}");
+            return;
+        }
+        Err(e) => panic!("seed {seed}: {e}\n{text}"),
+    };
     opts.method = Method::Pixel;
     let pixel = render(&scene, &evals, &opts).unwrap();
     for (k, &t) in beam.depth_t.iter().chain(&pixel.depth_t).enumerate() {
