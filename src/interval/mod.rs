@@ -5,8 +5,8 @@
 //! contains `f(a, b)` for every `a ∈ A`, `b ∈ B` where the point op `f`
 //! (see [`crate::ir::Op`]) gives a real (finite or not NaN) value. Rounding
 //! error is covered: the hardware computes in round-to-nearest, and each
-//! bound is then stepped one ulp outward (lower bound down, upper bound up),
-//! which covers the half-ulp error of a correctly rounded `+ - * / sqrt`.
+//! bound is then moved outward by one or two ulps ([`up`], [`down`]), which
+//! covers the half-ulp error of a correctly rounded `+ - * / sqrt`.
 //! Transcendentals call `libm`, whose stated error is below 1 ulp; we widen
 //! their results by [`TRANSCENDENTAL_ULPS`] ulps. The JIT (`crate::jit`)
 //! implements the same rules and is tested against this module.

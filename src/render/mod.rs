@@ -633,6 +633,12 @@ fn anti_alias(
     }
 }
 
+/// Whether `scene` is a 2D model seen along its missing axis (every
+/// object constant along every ray of its camera).
+pub fn is_flat(scene: &Scene) -> bool {
+    RayCamera::new(&scene.camera, 1, 1).is_ok_and(|cam| constant_along_rays(&cam, scene))
+}
+
 // Whether every object is constant along every ray: the camera is
 // orthographic (one direction d for all rays) and d has an exact zero
 // component on every coordinate an object's function reads (2D models seen
