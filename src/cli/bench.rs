@@ -308,7 +308,9 @@ fn bench_render(args: &RenderArgs) -> Result<(), CliError> {
         }
     }
     for f in skipped {
-        println!("\n{f}: point sampling left out (a 2D model seen along its missing axis: f is constant along every ray).");
+        println!(
+            "\n{f}: point sampling left out (a 2D model seen along its missing axis: f is constant along every ray)."
+        );
     }
     Ok(())
 }

@@ -352,7 +352,11 @@ pub fn render_aa(
     // Native code compiles lazily, on an evaluator kind's first use during
     // the render; that time is reported as compilation, not rendering.
     let compiled = |evals: &[Arc<dyn Evaluator>]| -> f64 {
-        evals.iter().map(|e| e.compile_time().as_secs_f64()).sum::<f64>() * 1e3
+        evals
+            .iter()
+            .map(|e| e.compile_time().as_secs_f64())
+            .sum::<f64>()
+            * 1e3
     };
     let compiled_before = compiled(evaluators);
     let (w, h) = (opts.width, opts.height);
