@@ -51,6 +51,12 @@ pub trait Evaluator: Send + Sync {
         [g.v, d]
     }
 
+    /// The IR function this evaluator evaluates, when it has one (the
+    /// renderer prunes it per tile, see `crate::ir::prune`).
+    fn function(&self) -> Option<&crate::ir::Function> {
+        None
+    }
+
     /// Time spent so far compiling this evaluator's native code (zero for
     /// evaluators that compile nothing). Renders subtract what lazy
     /// compilation adds to their wall time.

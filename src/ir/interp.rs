@@ -520,6 +520,10 @@ fn run_igrad(ops: &[Op], b: [Interval; 3], seed: [[Interval; 3]; 3], vals: &mut 
 }
 
 impl Evaluator for Interpreter {
+    fn function(&self) -> Option<&Function> {
+        Some(&self.f)
+    }
+
     fn point(&self, p: [f64; 3]) -> f64 {
         SCRATCH.with_borrow_mut(|s| {
             run_point(&self.f.ops, p, &mut s.point);

@@ -22,6 +22,7 @@ pub mod interp;
 pub mod lower;
 pub mod passes;
 pub mod print;
+pub mod prune;
 pub mod random;
 pub mod validate;
 
@@ -255,6 +256,22 @@ impl Function {
     /// The op that defines `v`.
     pub fn op(&self, v: ValueId) -> &Op {
         &self.ops[v.index()]
+    }
+
+    /// Number of ops the root depends on (itself included).
+    pub fn live_count(&self) -> usize {
+        let mut live = vec![false; self.ops.len()];
+        if let Some(l) = live.get_mut(self.root.index()) {
+            *l = true;
+        }
+        for i in (0..self.ops.len()).rev() {
+            if live[i] {
+                for a in self.ops[i].operands() {
+                    live[a.index()] = true;
+                }
+            }
+        }
+        live.iter().filter(|&&l| l).count()
     }
 
     /// Which of x, y, z the function reads (indexed by [`Var::index`]).

@@ -597,6 +597,10 @@ impl Evaluator for JitEvaluator {
         }
     }
 
+    fn function(&self) -> Option<&Function> {
+        Some(&self.f)
+    }
+
     fn compile_time(&self) -> Duration {
         self.compile_times().iter().map(|(_, t)| *t).sum()
     }

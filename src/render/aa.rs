@@ -603,6 +603,7 @@ mod tests {
             lights: &lights,
             bounds: Bounds::default(),
             diag: 7.0,
+            live_ops: vec![0; 1],
             flat: false,
         };
         let color = [0.8, 0.3, 0.2];

@@ -212,6 +212,69 @@ pub enum Class {
     Ray,
 }
 
+/// Functions with fewer live ops than this are not pruned per tile.
+const PRUNE_MIN_OPS: usize = 256;
+/// A pruned function replaces the native one only if it is at least this
+/// many times shorter: it runs in the interpreter, which costs about 3-7x
+/// the JIT per op (`ibeam bench eval`).
+const PRUNE_GAIN: usize = 8;
+
+/// Evaluators of the scene's functions pruned to the tile's beam (see
+/// [`crate::ir::prune`]), run by the interpreter; `None` when no object
+/// is large enough or shrinks enough. The beam is the hull of the tile's
+/// rays over their clipped T ranges, widened by a relative 1e-9 so that
+/// boxes the tracer rounds outward stay inside the region the pruned
+/// functions are exact on.
+fn prune_to_tile(
+    tr: &Tracer<'_>,
+    tile: &beam::TileRays,
+    th: u32,
+    st: &mut RenderStats,
+) -> Option<Vec<Arc<dyn Evaluator>>> {
+    if !tr.live_ops.iter().any(|&n| n >= PRUNE_MIN_OPS) {
+        return None;
+    }
+    let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
+    for &(a, c) in tile.slabs.iter().flatten() {
+        t0 = t0.min(a);
+        t1 = t1.max(c);
+    }
+    if t0.partial_cmp(&t1).is_none_or(|o| o.is_gt()) {
+        return None;
+    }
+    let xs = (f64::from(tile.x0) + 0.5, f64::from(tile.x0 + tile.w) - 0.5);
+    let ys = (f64::from(tile.y0) + 0.5, f64::from(tile.y0 + th) - 0.5);
+    let hull = tr.cam.corners(xs, ys).hull(Interval::new(t0, t1));
+    let region = camera::box_meet(hull, camera::bounds_box(&tr.bounds))?;
+    let region = region.map(|c| {
+        let pad = 1e-9 * (c.width() + c.lo.abs().max(c.hi.abs())) + f64::MIN_POSITIVE;
+        Interval::new(c.lo - pad, c.hi + pad)
+    });
+    let mut any = false;
+    let evals = tr
+        .evals
+        .iter()
+        .zip(&tr.live_ops)
+        .map(|(e, &before)| {
+            if before < PRUNE_MIN_OPS {
+                return None;
+            }
+            let f = e.function()?;
+            let p = crate::ir::prune::prune(f, region)?;
+            let after = p.function.live_count();
+            (after * PRUNE_GAIN <= before).then(|| {
+                any = true;
+                st.pruned_ops_before += before as u64;
+                st.pruned_ops_after += after as u64;
+                Arc::new(crate::ir::interp::Interpreter::new(p.function)) as Arc<dyn Evaluator>
+            })
+        })
+        .zip(tr.evals)
+        .map(|(p, e)| p.unwrap_or_else(|| Arc::clone(e)))
+        .collect();
+    any.then_some(evals)
+}
+
 /// Shared read-only state of one render.
 pub(crate) struct Tracer<'a> {
     pub cam: RayCamera,
@@ -220,6 +283,8 @@ pub(crate) struct Tracer<'a> {
     pub lights: &'a [Light],
     pub bounds: Bounds,
     pub diag: f64,
+    /// Live ops of each evaluator's function (0 when it has none).
+    pub live_ops: Vec<usize>,
     /// Every object is proven constant along every ray inside the bounds
     /// (2D models viewed along the missing axis): a block's T range then
     /// needs no bisection.
@@ -399,6 +464,10 @@ pub fn render_aa(
         lights: &scene.lights,
         bounds: b,
         diag: camera::norm(camera::sub(b.max, b.min)),
+        live_ops: evaluators
+            .iter()
+            .map(|e| e.function().map_or(0, |f| f.live_count()))
+            .collect(),
         flat: constant_along_rays(&cam, scene),
     };
     // IAA traces split pixels' sub-samples on the 2^depth× image, with its
@@ -412,6 +481,7 @@ pub fn render_aa(
             lights: &scene.lights,
             bounds: b,
             diag: tr.diag,
+            live_ops: tr.live_ops.clone(),
             flat: tr.flat,
         }),
         _ => None,
@@ -709,6 +779,24 @@ fn render_tile(
     };
     let method = opts.method;
     let all: Vec<u32> = (0..tr.evals.len() as u32).collect();
+    // Visibility inside the tile's beam runs on functions pruned to it;
+    // shading and shadows, whose segments leave the beam, keep `tr`.
+    let pruned = prune_to_tile(tr, &tile, th, &mut st);
+    let local;
+    let tr_vis = match &pruned {
+        Some(evals) => {
+            local = Tracer {
+                evals,
+                colors: tr.colors.clone(),
+                live_ops: tr.live_ops.clone(),
+                ..*tr
+            };
+            &local
+        }
+        None => tr,
+    };
+    let tr_full = tr;
+    let tr = tr_vis;
     match method {
         Method::Beam => beam::trace_tile(tr, &mut tile, th, &mut st),
         Method::Pixel | Method::Point { .. } => {
@@ -729,6 +817,7 @@ fn render_tile(
             tile.class[k] = Class::Outside;
         }
     }
+    let tr = tr_full;
     st.trace_cpu_ms += ms_since(t_trace);
 
     let t_shade = Instant::now();

@@ -442,6 +442,7 @@ mod tests {
             lights: &[],
             bounds: Bounds::default(),
             diag: 7.0,
+            live_ops: vec![0; 1],
             flat: false,
         };
         let (o, d) = ([-2.0, 0.0, 0.0], [1.0, 0.0, 0.0]);

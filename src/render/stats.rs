@@ -53,6 +53,11 @@ pub struct RenderStats {
     pub aa_split_by_shading: u64,
     /// Anti-aliasing tests and extra samples, summed over threads, ms.
     pub aa_cpu_ms: f64,
+    /// Live ops of the functions that were pruned to a tile, summed over
+    /// tiles (see `crate::ir::prune`).
+    pub pruned_ops_before: u64,
+    /// Live ops of those functions after pruning, summed over tiles.
+    pub pruned_ops_after: u64,
     /// Render wall time, ms (excludes parsing and compiling).
     pub time_ms: f64,
     /// Time to build the evaluators and compile their native code, ms.
@@ -93,6 +98,8 @@ impl RenderStats {
         self.aa_pixels_split += o.aa_pixels_split;
         self.aa_split_by_shading += o.aa_split_by_shading;
         self.aa_cpu_ms += o.aa_cpu_ms;
+        self.pruned_ops_before += o.pruned_ops_before;
+        self.pruned_ops_after += o.pruned_ops_after;
         self.trace_cpu_ms += o.trace_cpu_ms;
         self.shade_cpu_ms += o.shade_cpu_ms;
         self.shadow_cpu_ms += o.shadow_cpu_ms;
@@ -133,6 +140,8 @@ impl RenderStats {
             "aa_pixels_split": self.aa_pixels_split,
             "aa_split_by_shading": self.aa_split_by_shading,
             "aa_cpu_ms": self.aa_cpu_ms,
+            "pruned_ops_before": self.pruned_ops_before,
+            "pruned_ops_after": self.pruned_ops_after,
             "time_ms": self.time_ms,
             "compile_ms": self.compile_ms,
             "trace_cpu_ms": self.trace_cpu_ms,
@@ -178,6 +187,15 @@ impl fmt::Display for RenderStats {
             self.aa_pixels_split,
             self.aa_split_by_shading
         )?;
+        if self.pruned_ops_before > 0 {
+            writeln!(
+                f,
+                "pruned per tile: {} ops evaluated as {} ({:.1}%)",
+                self.pruned_ops_before,
+                self.pruned_ops_after,
+                100.0 * self.pruned_ops_after as f64 / self.pruned_ops_before as f64
+            )?;
+        }
         write!(
             f,
             "cpu ms: trace {:.1}, shade {:.1}, shadow {:.1}, aa {:.1}; output {:.1} ms",
