@@ -452,7 +452,12 @@ pub fn render_aa(
     // say so rather than draw an empty image.
     let whole = camera::bounds_box(&b);
     for (o, e) in scene.objects.iter().zip(evaluators) {
-        if e.interval(whole).is_empty() {
+        // The interpreter answers this one question without compiling.
+        let f = match e.function() {
+            Some(f) => crate::ir::interp::Interpreter::new(f.clone()).interval(whole),
+            None => e.interval(whole),
+        };
+        if f.is_empty() {
             return Err(RenderError::Undefined(o.name.clone()));
         }
     }
@@ -817,9 +822,10 @@ fn render_tile(
             tile.class[k] = Class::Outside;
         }
     }
-    let tr = tr_full;
     st.trace_cpu_ms += ms_since(t_trace);
 
+    // Hit points lie in the tile's beam: their normals may come from the
+    // pruned functions too (the same bits).
     let t_shade = Instant::now();
     let surfs: Vec<Option<shade::Surf>> = (0..n)
         .map(|k| {
@@ -829,6 +835,7 @@ fn render_tile(
         })
         .collect();
     st.shade_cpu_ms += ms_since(t_shade);
+    let tr = tr_full;
 
     // Shadow beams over included blocks.
     let t_shadow = Instant::now();
