@@ -122,6 +122,29 @@ pub(crate) fn segment_free(
             front_ok = Some(inside_bounds);
             continue;
         }
+        // A point of one of the segments (the first start's) inside a
+        // solid settles the answer (not free) at once, where the bisection
+        // would otherwise go down to `min_w` at the blocker's surface
+        // before giving up. It never changes a provable answer: every
+        // interval over a box holding that point contains its (negative)
+        // value, so no piece around it could be rejected, and the
+        // monotonicity proof would need f > 0 on that segment.
+        if let Some(s0) = starts.first() {
+            let m = 0.5 * (a + c);
+            // Clamped into the piece's box against rounding (max/min, not
+            // `clamp`, which panics on NaN bounds).
+            let p: [f64; 3] = std::array::from_fn(|i| {
+                let d0 = match end {
+                    SegEnd::Point(l) => l[i] - s0[i],
+                    SegEnd::Offset(o) => o[i],
+                };
+                (s0[i] + m * d0).max(bx[i].lo).min(bx[i].hi)
+            });
+            let in_bounds = (0..3).all(|i| bounds[i].contains(p[i]));
+            if in_bounds && maybe.iter().any(|&k| tr.point(k, p, st) < 0.0) {
+                return false;
+            }
+        }
         // Positive at the start and increasing along every segment over
         // the piece: positive on the whole piece.
         let ok = match front_ok {
