@@ -258,8 +258,8 @@ impl Function {
         &self.ops[v.index()]
     }
 
-    /// Number of ops the root depends on (itself included).
-    pub fn live_count(&self) -> usize {
+    /// Which ops the root depends on (itself included), by index.
+    pub fn live_mask(&self) -> Vec<bool> {
         let mut live = vec![false; self.ops.len()];
         if let Some(l) = live.get_mut(self.root.index()) {
             *l = true;
@@ -271,7 +271,12 @@ impl Function {
                 }
             }
         }
-        live.iter().filter(|&&l| l).count()
+        live
+    }
+
+    /// Number of ops the root depends on (itself included).
+    pub fn live_count(&self) -> usize {
+        self.live_mask().iter().filter(|&&l| l).count()
     }
 
     /// Which of x, y, z the function reads (indexed by [`Var::index`]).

@@ -14,18 +14,7 @@ use crate::ir::{BinaryOp, Function, Op, UnaryOp};
 
 /// Which ops the root depends on (by index).
 pub(crate) fn live_ops(f: &Function) -> Vec<bool> {
-    let mut live = vec![false; f.ops.len()];
-    if let Some(l) = live.get_mut(f.root.index()) {
-        *l = true;
-    }
-    for i in (0..f.ops.len()).rev() {
-        if live[i] {
-            for a in f.ops[i].operands() {
-                live[a.index()] = true;
-            }
-        }
-    }
-    live
+    f.live_mask()
 }
 
 /// A use further than this many ops from the value's last register copy
