@@ -57,6 +57,12 @@ pub trait Evaluator: Send + Sync {
         None
     }
 
+    /// Whether this evaluator runs native code (the renderer replaces it by
+    /// an interpreted pruned function only if that is much shorter).
+    fn is_native(&self) -> bool {
+        false
+    }
+
     /// Time spent so far compiling this evaluator's native code (zero for
     /// evaluators that compile nothing). Renders subtract what lazy
     /// compilation adds to their wall time.

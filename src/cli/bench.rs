@@ -264,6 +264,7 @@ fn bench_render(args: &RenderArgs) -> Result<(), CliError> {
                     want_normals: false,
                     want_classify: false,
                     progress: false,
+                    prune: true,
                 };
                 // The first render of a scene also compiles its lazy JIT
                 // kinds; render once untimed so every row is steady-state.

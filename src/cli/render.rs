@@ -76,6 +76,10 @@ pub struct Args {
     /// Write the render statistics as JSON.
     #[arg(long)]
     pub stats_json: Option<PathBuf>,
+    /// Evaluate large functions whole, without pruning them to each tile
+    /// and block (slower; for measuring what pruning saves).
+    #[arg(long)]
+    pub no_prune: bool,
     /// No progress and no summary.
     #[arg(long)]
     pub quiet: bool,
@@ -209,6 +213,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         want_normals: args.normals.is_some(),
         want_classify: args.classify.is_some(),
         progress: !args.quiet && std::io::stderr().is_terminal(),
+        prune: !args.no_prune,
     };
     let mut out = render_aa(&scene, &evaluators, &opts, aa)?;
     out.stats.compile_ms += compile_ms;

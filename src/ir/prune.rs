@@ -41,13 +41,29 @@ pub fn prune(f: &Function, b: [Interval; 3]) -> Option<Pruned> {
     let finite = |i: Interval| i.lo.is_finite() && i.hi.is_finite();
     // defined[i]: op i gives a finite number at every point of the box.
     let mut defined = vec![false; f.ops.len()];
+    // nonneg[i]: op i is never negative, by its form (a square, a sum of
+    // squares...). Floating-point point values keep that sign exactly,
+    // while the interval of such a sum may dip below 0 by rounding, which
+    // alone would leave `sqrt(x² + y²)` unproven.
+    let mut nonneg = vec![false; f.ops.len()];
     // alias[i]: the op whose value op i always equals on the box.
     let mut alias: Vec<usize> = (0..f.ops.len()).collect();
     let mut decided = 0;
     for (i, op) in f.ops.iter().enumerate() {
         let args_defined = op.operands().all(|a| defined[a.index()]);
+        nonneg[i] = match *op {
+            Op::Const(c) => c >= 0.0,
+            Op::Unary(UnaryOp::Square | UnaryOp::Abs | UnaryOp::Sqrt | UnaryOp::Exp, _) => true,
+            Op::Powi(_, n) => n % 2 == 0,
+            Op::Binary(
+                BinaryOp::Add | BinaryOp::Mul | BinaryOp::Div | BinaryOp::Min | BinaryOp::Max,
+                x,
+                y,
+            ) => nonneg[x.index()] && nonneg[y.index()],
+            _ => false,
+        };
         let domain = match *op {
-            Op::Unary(UnaryOp::Sqrt, a) => iv[a.index()].lo >= 0.0,
+            Op::Unary(UnaryOp::Sqrt, a) => iv[a.index()].lo >= 0.0 || nonneg[a.index()],
             Op::Unary(UnaryOp::Ln, a) => iv[a.index()].lo > 0.0,
             Op::Binary(BinaryOp::Div, _, d) => iv[d.index()].lo > 0.0 || iv[d.index()].hi < 0.0,
             Op::Binary(BinaryOp::Pow, base, _) => iv[base.index()].lo > 0.0,

@@ -601,6 +601,10 @@ impl Evaluator for JitEvaluator {
         Some(&self.f)
     }
 
+    fn is_native(&self) -> bool {
+        true
+    }
+
     fn compile_time(&self) -> Duration {
         self.compile_times().iter().map(|(_, t)| *t).sum()
     }

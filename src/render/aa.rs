@@ -604,6 +604,7 @@ mod tests {
             bounds: Bounds::default(),
             diag: 7.0,
             live_ops: vec![0; 1],
+            prune: false,
             flat: false,
         };
         let color = [0.8, 0.3, 0.2];

@@ -85,6 +85,9 @@ pub struct RenderOptions {
     pub want_classify: bool,
     /// Print tile progress on stderr.
     pub progress: bool,
+    /// Prune large functions to each tile and block (see
+    /// [`crate::ir::prune`]); off only to measure what it saves.
+    pub prune: bool,
 }
 
 impl RenderOptions {
@@ -99,6 +102,7 @@ impl RenderOptions {
             want_normals: false,
             want_classify: false,
             progress: false,
+            prune: true,
         }
     }
 }
@@ -212,28 +216,89 @@ pub enum Class {
     Ray,
 }
 
-/// Functions with fewer live ops than this are not pruned per tile.
-const PRUNE_MIN_OPS: usize = 256;
-/// A pruned function replaces the native one only if it is at least this
+/// Functions with fewer live ops than this are not pruned.
+const PRUNE_MIN_OPS: usize = 64;
+/// A pruned function replaces a native one only if it is at least this
 /// many times shorter: it runs in the interpreter, which costs about 3-7x
 /// the JIT per op (`ibeam bench eval`).
-const PRUNE_GAIN: usize = 8;
+const PRUNE_GAIN_NATIVE: usize = 8;
+/// ... and an interpreted one if it is at least this many times shorter.
+const PRUNE_GAIN_INTERPRETED: usize = 2;
 
-/// Evaluators of the scene's functions pruned to the tile's beam (see
-/// [`crate::ir::prune`]), run by the interpreter; `None` when no object
-/// is large enough or shrinks enough. The beam is the hull of the tile's
-/// rays over their clipped T ranges, widened by a relative 1e-9 so that
-/// boxes the tracer rounds outward stay inside the region the pruned
-/// functions are exact on.
+/// The region every evaluation for the rays through the pixel centres
+/// `xs × ys` over `t` happens in: their beam's hull inside the bounds,
+/// widened by a relative 1e-9 so that boxes the tracer rounds outward stay
+/// inside it. `None` when the beam misses the bounds.
+pub(crate) fn beam_region(
+    tr: &Tracer<'_>,
+    xs: (f64, f64),
+    ys: (f64, f64),
+    t: Interval,
+) -> Option<IBox> {
+    let hull = tr.cam.corners(xs, ys).hull(t);
+    let region = camera::box_meet(hull, camera::bounds_box(&tr.bounds))?;
+    Some(region.map(|c| {
+        let pad = 1e-9 * (c.width() + c.lo.abs().max(c.hi.abs())) + f64::MIN_POSITIVE;
+        Interval::new(c.lo - pad, c.hi + pad)
+    }))
+}
+
+/// The scene's evaluators with every function that shrinks enough pruned
+/// to `region` (see [`crate::ir::prune`]) and run by the interpreter, and
+/// their live op counts; `None` when none does. Exact on the region: use
+/// them only for evaluations inside it.
+pub(crate) fn prune_evals(
+    tr: &Tracer<'_>,
+    region: IBox,
+    st: &mut RenderStats,
+) -> Option<(Vec<Arc<dyn Evaluator>>, Vec<usize>)> {
+    if !tr.prune || !tr.live_ops.iter().any(|&n| n >= PRUNE_MIN_OPS) {
+        return None;
+    }
+    let mut any = false;
+    let mut live = tr.live_ops.clone();
+    let evals = tr
+        .evals
+        .iter()
+        .zip(live.iter_mut())
+        .map(|(e, n)| {
+            let before = *n;
+            if before < PRUNE_MIN_OPS {
+                return Arc::clone(e);
+            }
+            let gain = if e.is_native() {
+                PRUNE_GAIN_NATIVE
+            } else {
+                PRUNE_GAIN_INTERPRETED
+            };
+            let pruned = e
+                .function()
+                .and_then(|f| crate::ir::prune::prune(f, region))
+                .map(|p| (p.function.live_count(), p.function))
+                .filter(|(after, _)| after * gain <= before);
+            match pruned {
+                Some((after, f)) => {
+                    any = true;
+                    *n = after;
+                    st.pruned_ops_before += before as u64;
+                    st.pruned_ops_after += after as u64;
+                    Arc::new(crate::ir::interp::Interpreter::new(f)) as Arc<dyn Evaluator>
+                }
+                None => Arc::clone(e),
+            }
+        })
+        .collect();
+    any.then_some((evals, live))
+}
+
+/// Evaluators pruned to the tile's beam: the rays through its pixel
+/// centres over their clipped T ranges.
 fn prune_to_tile(
     tr: &Tracer<'_>,
     tile: &beam::TileRays,
     th: u32,
     st: &mut RenderStats,
-) -> Option<Vec<Arc<dyn Evaluator>>> {
-    if !tr.live_ops.iter().any(|&n| n >= PRUNE_MIN_OPS) {
-        return None;
-    }
+) -> Option<(Vec<Arc<dyn Evaluator>>, Vec<usize>)> {
     let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
     for &(a, c) in tile.slabs.iter().flatten() {
         t0 = t0.min(a);
@@ -244,35 +309,7 @@ fn prune_to_tile(
     }
     let xs = (f64::from(tile.x0) + 0.5, f64::from(tile.x0 + tile.w) - 0.5);
     let ys = (f64::from(tile.y0) + 0.5, f64::from(tile.y0 + th) - 0.5);
-    let hull = tr.cam.corners(xs, ys).hull(Interval::new(t0, t1));
-    let region = camera::box_meet(hull, camera::bounds_box(&tr.bounds))?;
-    let region = region.map(|c| {
-        let pad = 1e-9 * (c.width() + c.lo.abs().max(c.hi.abs())) + f64::MIN_POSITIVE;
-        Interval::new(c.lo - pad, c.hi + pad)
-    });
-    let mut any = false;
-    let evals = tr
-        .evals
-        .iter()
-        .zip(&tr.live_ops)
-        .map(|(e, &before)| {
-            if before < PRUNE_MIN_OPS {
-                return None;
-            }
-            let f = e.function()?;
-            let p = crate::ir::prune::prune(f, region)?;
-            let after = p.function.live_count();
-            (after * PRUNE_GAIN <= before).then(|| {
-                any = true;
-                st.pruned_ops_before += before as u64;
-                st.pruned_ops_after += after as u64;
-                Arc::new(crate::ir::interp::Interpreter::new(p.function)) as Arc<dyn Evaluator>
-            })
-        })
-        .zip(tr.evals)
-        .map(|(p, e)| p.unwrap_or_else(|| Arc::clone(e)))
-        .collect();
-    any.then_some(evals)
+    prune_evals(tr, beam_region(tr, xs, ys, Interval::new(t0, t1))?, st)
 }
 
 /// Shared read-only state of one render.
@@ -285,13 +322,33 @@ pub(crate) struct Tracer<'a> {
     pub diag: f64,
     /// Live ops of each evaluator's function (0 when it has none).
     pub live_ops: Vec<usize>,
+    /// Prune large functions to tiles and blocks.
+    pub prune: bool,
     /// Every object is proven constant along every ray inside the bounds
     /// (2D models viewed along the missing axis): a block's T range then
     /// needs no bisection.
     pub flat: bool,
 }
 
-impl Tracer<'_> {
+impl<'a> Tracer<'a> {
+    /// The same tracer with other evaluators (pruned ones) and their live
+    /// op counts.
+    pub(crate) fn with_evals<'b>(
+        &self,
+        evals: &'b [Arc<dyn Evaluator>],
+        live_ops: Vec<usize>,
+    ) -> Tracer<'b>
+    where
+        'a: 'b,
+    {
+        Tracer {
+            evals,
+            colors: self.colors.clone(),
+            live_ops,
+            ..*self
+        }
+    }
+
     pub(crate) fn interval(&self, k: usize, b: IBox, st: &mut RenderStats) -> Interval {
         st.interval_evals += 1;
         self.evals[k].interval(b)
@@ -473,6 +530,7 @@ pub fn render_aa(
             .iter()
             .map(|e| e.function().map_or(0, |f| f.live_count()))
             .collect(),
+        prune: opts.prune,
         flat: constant_along_rays(&cam, scene),
     };
     // IAA traces split pixels' sub-samples on the 2^depth× image, with its
@@ -487,6 +545,7 @@ pub fn render_aa(
             bounds: b,
             diag: tr.diag,
             live_ops: tr.live_ops.clone(),
+            prune: tr.prune,
             flat: tr.flat,
         }),
         _ => None,
@@ -789,13 +848,8 @@ fn render_tile(
     let pruned = prune_to_tile(tr, &tile, th, &mut st);
     let local;
     let tr_vis = match &pruned {
-        Some(evals) => {
-            local = Tracer {
-                evals,
-                colors: tr.colors.clone(),
-                live_ops: tr.live_ops.clone(),
-                ..*tr
-            };
+        Some((evals, live)) => {
+            local = tr.with_evals(evals, live.clone());
             &local
         }
         None => tr,

@@ -443,6 +443,7 @@ mod tests {
             bounds: Bounds::default(),
             diag: 7.0,
             live_ops: vec![0; 1],
+            prune: false,
             flat: false,
         };
         let (o, d) = ([-2.0, 0.0, 0.0], [1.0, 0.0, 0.0]);
