@@ -243,6 +243,9 @@ pub(crate) fn beam_region(
     }))
 }
 
+/// Evaluators (some pruned) and the live op count of each one's function.
+pub(crate) type PrunedEvals = (Vec<Arc<dyn Evaluator>>, Vec<usize>);
+
 /// The scene's evaluators with every function that shrinks enough pruned
 /// to `region` (see [`crate::ir::prune`]) and run by the interpreter, and
 /// their live op counts; `None` when none does. Exact on the region: use
@@ -251,7 +254,7 @@ pub(crate) fn prune_evals(
     tr: &Tracer<'_>,
     region: IBox,
     st: &mut RenderStats,
-) -> Option<(Vec<Arc<dyn Evaluator>>, Vec<usize>)> {
+) -> Option<PrunedEvals> {
     if !tr.prune || !tr.live_ops.iter().any(|&n| n >= PRUNE_MIN_OPS) {
         return None;
     }
@@ -298,7 +301,7 @@ fn prune_to_tile(
     tile: &beam::TileRays,
     th: u32,
     st: &mut RenderStats,
-) -> Option<(Vec<Arc<dyn Evaluator>>, Vec<usize>)> {
+) -> Option<PrunedEvals> {
     let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
     for &(a, c) in tile.slabs.iter().flatten() {
         t0 = t0.min(a);
