@@ -57,6 +57,18 @@ pub trait Evaluator: Send + Sync {
         None
     }
 
+    /// Where [`Evaluator::function`] is exact, when that is not
+    /// everywhere (a function pruned to a region).
+    fn valid_region(&self) -> Option<[Interval; 3]> {
+        None
+    }
+
+    /// The evaluator of the whole function, for one that holds a pruned
+    /// function.
+    fn whole(&self) -> Option<&std::sync::Arc<dyn Evaluator>> {
+        None
+    }
+
     /// Whether this evaluator runs native code (the renderer replaces it by
     /// an interpreted pruned function only if that is much shorter).
     fn is_native(&self) -> bool {

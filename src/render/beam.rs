@@ -178,7 +178,8 @@ fn block(
             set_block(tile, b, Class::Background);
         } else {
             st.blocks_undecided += 1;
-            split(tr, tile, b, t0, live, st);
+            let window = Interval::new(t0, t1);
+            split_pruned(tr, tile, b, (xs, ys, window), t0, live, st);
         }
         return;
     }
@@ -220,7 +221,38 @@ fn block(
             !(v.is_empty() || v.lo > 0.0)
         })
         .collect();
-    split(tr, tile, b, ta, &sub_live, st);
+    // The sub-blocks work near the first candidate piece: prune there.
+    let window = Interval::new(ta, t1.min(ta + PRUNE_WINDOW * (tb - ta).max(min_w(ta))));
+    split_pruned(tr, tile, b, (xs, ys, window), ta, &sub_live, st);
+}
+
+// Width of the window a split block prunes its functions to, in units of
+// its first candidate piece: its sub-blocks and rays evaluate mostly there
+// (evaluations outside it use the unpruned functions, see
+// `super::regional`).
+const PRUNE_WINDOW: f64 = 8.0;
+
+// `split`, with the functions first pruned to the block's beam over
+// `window` (screen extents of its pixel centres) where that shrinks them
+// enough (see `super::prune_evals`).
+fn split_pruned(
+    tr: &Tracer<'_>,
+    tile: &mut TileRays,
+    b: Block,
+    (xs, ys, window): ((f64, f64), (f64, f64), Interval),
+    t_floor: f64,
+    live: &[u32],
+    st: &mut RenderStats,
+) {
+    let pruned = super::beam_region(tr, xs, ys, window)
+        .and_then(|region| super::prune_evals(tr, region, st));
+    match pruned {
+        Some((evals, live_ops)) => {
+            let local = tr.with_evals(&evals, live_ops);
+            split(&local, tile, b, t_floor, live, st);
+        }
+        None => split(tr, tile, b, t_floor, live, st),
+    }
 }
 
 // Traces the four quarters of a block.

@@ -27,6 +27,7 @@ pub mod beam;
 pub mod camera;
 pub mod output;
 pub mod ray;
+mod regional;
 pub mod shade;
 pub mod stats;
 
@@ -225,18 +226,25 @@ const PRUNE_GAIN_NATIVE: usize = 8;
 /// ... and an interpreted one if it is at least this many times shorter.
 const PRUNE_GAIN_INTERPRETED: usize = 2;
 
-/// The region every evaluation for the rays through the pixel centres
-/// `xs × ys` over `t` happens in: their beam's hull inside the bounds,
-/// widened by a relative 1e-9 so that boxes the tracer rounds outward stay
-/// inside it. `None` when the beam misses the bounds.
+/// The region the evaluations for the rays through the pixel centres
+/// `xs × ys` over `t` happen in: their beam's hull (not clipped to the
+/// bounds, which the tracer's own boxes overhang by rounding), widened by
+/// a relative 1e-9 so that boxes the tracer rounds outward stay inside it.
+/// An evaluation that still falls outside uses the whole function (see
+/// `regional`).
 pub(crate) fn beam_region(
     tr: &Tracer<'_>,
     xs: (f64, f64),
     ys: (f64, f64),
     t: Interval,
 ) -> Option<IBox> {
-    let hull = tr.cam.corners(xs, ys).hull(t);
-    let region = camera::box_meet(hull, camera::bounds_box(&tr.bounds))?;
+    let region = tr.cam.corners(xs, ys).hull(t);
+    if region
+        .iter()
+        .any(|c| c.is_empty() || !c.lo.is_finite() || !c.hi.is_finite())
+    {
+        return None;
+    }
     Some(region.map(|c| {
         let pad = 1e-9 * (c.width() + c.lo.abs().max(c.hi.abs())) + f64::MIN_POSITIVE;
         Interval::new(c.lo - pad, c.hi + pad)
@@ -258,6 +266,9 @@ pub(crate) fn prune_evals(
     if !tr.prune || !tr.live_ops.iter().any(|&n| n >= PRUNE_MIN_OPS) {
         return None;
     }
+    let within = |inner: &IBox, outer: &IBox| {
+        (0..3).all(|i| outer[i].lo <= inner[i].lo && inner[i].hi <= outer[i].hi)
+    };
     let mut any = false;
     let mut live = tr.live_ops.clone();
     let evals = tr
@@ -267,29 +278,42 @@ pub(crate) fn prune_evals(
         .map(|(e, n)| {
             let before = *n;
             if before < PRUNE_MIN_OPS {
-                return Arc::clone(e);
+                return None;
             }
-            let gain = if e.is_native() {
+            // Prune what `e` already pruned when the new region lies in
+            // the old one; else start again from the whole function.
+            let whole = e.whole().cloned().unwrap_or_else(|| Arc::clone(e));
+            let (source, before) = match e.valid_region() {
+                Some(r) if !within(&region, &r) => {
+                    let f = whole.function()?;
+                    (f, f.live_count())
+                }
+                _ => (e.function()?, before),
+            };
+            let gain = if whole.is_native() {
                 PRUNE_GAIN_NATIVE
             } else {
                 PRUNE_GAIN_INTERPRETED
             };
-            let pruned = e
-                .function()
-                .and_then(|f| crate::ir::prune::prune(f, region))
-                .map(|p| (p.function.live_count(), p.function))
-                .filter(|(after, _)| after * gain <= before);
-            match pruned {
-                Some((after, f)) => {
-                    any = true;
-                    *n = after;
-                    st.pruned_ops_before += before as u64;
-                    st.pruned_ops_after += after as u64;
-                    Arc::new(crate::ir::interp::Interpreter::new(f)) as Arc<dyn Evaluator>
-                }
-                None => Arc::clone(e),
+            let p = crate::ir::prune::prune(source, region)?;
+            let after = p.function.live_count();
+            if after * gain > before {
+                return None;
             }
+            any = true;
+            *n = after;
+            st.pruned_ops_before += before as u64;
+            st.pruned_ops_after += after as u64;
+            Some(Arc::new(regional::Regional {
+                region,
+                pruned: crate::ir::interp::Interpreter::new(p.function),
+                whole,
+            }) as Arc<dyn Evaluator>)
         })
+        .collect::<Vec<Option<Arc<dyn Evaluator>>>>()
+        .into_iter()
+        .zip(tr.evals)
+        .map(|(p, e)| p.unwrap_or_else(|| Arc::clone(e)))
         .collect();
     any.then_some((evals, live))
 }
