@@ -14,37 +14,25 @@
 
 use std::sync::Arc;
 
+use ibeam::cli::{EvalKind, build_evaluators};
 use ibeam::eval::Evaluator;
 use ibeam::interval::Interval;
 use ibeam::ir::interp::Interpreter;
 use ibeam::ir::passes;
 use ibeam::ir::random::Rng;
-use ibeam::jit::JitEvaluator;
 use ibeam::render::{Method, RenderError, RenderOptions, render};
 use ibeam::scene::Scene;
 use proptest::prelude::*;
 
-/// The evaluators every render in this file uses: the JIT, as the CLI
-/// uses by default.
+/// The evaluators every render in this file uses: the JIT, built as the
+/// CLI builds it.
 fn evaluators(scene: &Scene) -> Vec<Arc<dyn Evaluator>> {
-    scene
-        .objects
-        .iter()
-        .map(|o| {
-            let f = passes::simplify(&o.function);
-            Arc::new(JitEvaluator::new(&f).expect("JIT accepts valid IR")) as Arc<dyn Evaluator>
-        })
-        .collect()
+    build_evaluators(scene, EvalKind::Jit).expect("JIT accepts valid IR")
 }
 
 /// The reference interpreter over the same simplified functions.
-#[allow(dead_code)]
 fn interp_evaluators(scene: &Scene) -> Vec<Arc<dyn Evaluator>> {
-    scene
-        .objects
-        .iter()
-        .map(|o| Arc::new(Interpreter::new(passes::simplify(&o.function))) as Arc<dyn Evaluator>)
-        .collect()
+    build_evaluators(scene, EvalKind::Interp).expect("valid IR")
 }
 
 /// A number as source text: two decimals, negatives in parentheses.
