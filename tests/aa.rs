@@ -252,3 +252,66 @@ fn sweep_of_a_custom_variant_list_has_one_row_each() {
     assert_eq!(rows.len(), 2);
     assert!(rows[1].pareto);
 }
+
+/// Shadow edges: a ball above a ground plane, lit from the side, seen
+/// from above. The colour interval leaves shadows out, so IAA finds shadow
+/// edges by comparing each pixel's shadow state with its neighbours':
+/// every ground pixel whose base colour jumps against a ground neighbour
+/// (lit against shadowed; the ground is flat, so nothing else changes its
+/// colour) is split, even at the loosest colour threshold.
+#[test]
+fn iaa_splits_shadow_edges() {
+    let text = "object ground = plane(0, 1, 0, 0);\n\
+                object ball = translate(sphere(0.5), 0, 1, 0);\n\
+                camera { eye = (0, 6, 0.001); target = (0, 0, 0); up = (0, 0, -1); fov = 30; }\n\
+                bounds = (-2, -0.5, -2) .. (2, 2, 2);\n\
+                light { direction = (-1, -1, 0); color = (1, 1, 1); shadows = true; }\n";
+    let scene = ibeam::lang::load_scene_source("shadow.ib", text).unwrap();
+    let evals = interp(&scene).unwrap();
+    let n = 48usize;
+    let plain = go(&scene, &evals, n as u32, Aa::None, 1);
+    let aa = Aa::Iaa {
+        threshold: 1.0,
+        depth: 2,
+    };
+    let out = go(&scene, &evals, n as u32, aa, 1);
+    let ground_t = plain
+        .depth_t
+        .iter()
+        .copied()
+        .fold(0.0f64, |m, t| if t.is_finite() { m.max(t) } else { m });
+    let ground = |k: usize| (plain.depth_t[k] - ground_t).abs() < 0.3;
+    let tile = |c: usize| c / 32;
+    let mut edges = 0;
+    for y in 0..n {
+        for x in 0..n {
+            let k = y * n + x;
+            if !ground(k) {
+                continue;
+            }
+            let jump = [
+                (x.wrapping_sub(1), y),
+                (x + 1, y),
+                (x, y.wrapping_sub(1)),
+                (x, y + 1),
+            ]
+            .iter()
+            .filter(|&&(i, j)| i < n && j < n && tile(i) == tile(x) && tile(j) == tile(y))
+            .map(|&(i, j)| j * n + i)
+            .any(|m| {
+                ground(m) && (0..3).any(|c| (plain.linear[m][c] - plain.linear[k][c]).abs() > 0.1)
+            });
+            if jump {
+                edges += 1;
+                assert!(
+                    out.samples[k] > 1,
+                    "shadow-edge pixel ({x}, {y}) kept one sample"
+                );
+            }
+        }
+    }
+    assert!(
+        edges >= 10,
+        "only {edges} shadow-edge pixels: the scene lost its shadow"
+    );
+}

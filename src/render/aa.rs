@@ -28,8 +28,12 @@
 //!
 //! Shadows are not part of the colour interval (proving a shadow edge
 //! absent over a beam needs a shadow beam from a surface patch, which the
-//! surface itself obstructs); a smooth pixel takes its shadow state from
-//! its one sample, so shadow edges across smooth pixels stay aliased. The
+//! surface itself obstructs). Instead a hit pixel whose base sample has
+//! another set of shadowed lights than a hit 4-neighbour's (in the same
+//! tile) is never smooth: shadow edges are split like silhouettes. This is
+//! a sampling heuristic, not a proof: a shadow narrower than the pixel
+//! spacing can fall between base samples, and an edge running exactly
+//! along a tile border is not seen. The
 //! pixel's centre ray is never discarded when it is the only evidence of
 //! surface: if every sub-sample of a split pixel misses but the centre ray
 //! hit, the centre sample joins the average with a sub-sample's weight, so
@@ -158,6 +162,8 @@ pub(crate) struct TilePixels<'a> {
     pub coverage: &'a mut [f64],
     /// Samples per pixel.
     pub samples: &'a mut [u32],
+    /// Lights shadowed at each base sample (bit per light).
+    pub shadowed: &'a [u64],
 }
 
 /// What a cell's beam tests decided.
@@ -188,10 +194,31 @@ pub(crate) fn classify_tile(
 ) -> Vec<bool> {
     let n = (px.w * px.h) as usize;
     let mut split = vec![false; n];
+    // A hit pixel whose shadow state differs from a hit neighbour's sits
+    // on a shadow edge (neighbours in other tiles are not seen, so an edge
+    // running exactly along a tile border is missed).
+    let hit = |i: u32, j: u32| px.depth[(j * px.w + i) as usize].is_finite();
+    let shadow_edge: Vec<bool> = (0..n)
+        .map(|k| {
+            let (i, j) = (k as u32 % px.w, k as u32 / px.w);
+            hit(i, j)
+                && [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)]
+                    .iter()
+                    .any(|&(di, dj)| {
+                        let (ni, nj) = (i64::from(i) + di, i64::from(j) + dj);
+                        (0..i64::from(px.w)).contains(&ni)
+                            && (0..i64::from(px.h)).contains(&nj)
+                            && hit(ni as u32, nj as u32)
+                            && px.shadowed[(nj as u32 * px.w + ni as u32) as usize]
+                                != px.shadowed[k]
+                    })
+        })
+        .collect();
     let ctx = Ctx {
         tr,
         background,
         threshold,
+        shadow_edge: &shadow_edge,
     };
     ctx.block(px, &mut split, (0, 0, px.w, px.h), 0.0, st);
     split
@@ -247,6 +274,8 @@ struct Ctx<'t, 'a> {
     tr: &'t Tracer<'a>,
     background: [f64; 3],
     threshold: f64,
+    /// Pixels on a shadow edge (see `classify_tile`).
+    shadow_edge: &'t [bool],
 }
 
 impl Ctx<'_, '_> {
@@ -270,6 +299,9 @@ impl Ctx<'_, '_> {
                 (bx0..bx1).all(|i| px.depth[(j * px.w + i) as usize].is_finite() == want_hit)
             })
         };
+        let edge_in = |px: &TilePixels<'_>| {
+            (by0..by1).any(|j| (bx0..bx1).any(|i| self.shadow_edge[(j * px.w + i) as usize]))
+        };
         match d.cell {
             Cell::Background if agrees(px, false) => {
                 for j in by0..by1 {
@@ -279,12 +311,14 @@ impl Ctx<'_, '_> {
                 }
                 return;
             }
-            Cell::Smooth if agrees(px, true) => return,
+            Cell::Smooth if agrees(px, true) && !edge_in(px) => return,
             _ => {}
         }
         if bx1 - bx0 == 1 && by1 - by0 == 1 {
-            split[(by0 * px.w + bx0) as usize] = true;
-            st.aa_split_by_shading += u64::from(d.by_shading);
+            let k = (by0 * px.w + bx0) as usize;
+            split[k] = true;
+            let edge = d.cell == Cell::Smooth && self.shadow_edge[k];
+            st.aa_split_by_shading += u64::from(d.by_shading || edge);
             return;
         }
         let mx = (bx0 + bx1).div_ceil(2);
@@ -646,7 +680,7 @@ mod tests {
                     color,
                 };
                 let mut st = RenderStats::default();
-                let c = shade::shade(&tr, &surf, &[true, true], &mut st);
+                let (c, _) = shade::shade(&tr, &surf, &[true, true], &mut st);
                 for ch in 0..3 {
                     assert!(
                         ci[ch].lo - 1e-12 <= c[ch] && c[ch] <= ci[ch].hi + 1e-12,

@@ -468,6 +468,8 @@ struct TileOut {
     w: u32,
     h: u32,
     linear: Vec<[f64; 3]>,
+    /// Lights shadowed at each sample (bit per light; see `shade::shade`).
+    shadowed: Vec<u64>,
     coverage: Vec<f64>,
     samples: Vec<u32>,
     // Kept compact: a full-size render holds every tile at once.
@@ -710,6 +712,8 @@ fn downsample(t: TileOut, s: u32) -> TileOut {
         w,
         h,
         linear,
+        // Anti-aliasing on a supersampled image never reads this.
+        shadowed: vec![0; n],
         coverage,
         samples: vec![s * s; n],
         depth,
@@ -745,6 +749,7 @@ fn anti_alias(
                 depth: &mut t.depth,
                 coverage: &mut t.coverage,
                 samples: &mut t.samples,
+                shadowed: &t.shadowed,
             };
             let split = aa::classify_tile(tr, &mut px, bg, threshold, &mut st);
             let f = 1u32 << depth;
@@ -958,14 +963,16 @@ fn render_tile(
 
     let t_shade = Instant::now();
     let mut linear = vec![background; n];
+    let mut shadowed = vec![0u64; n];
     let mut normals = opts.want_normals.then(|| vec![Rgb([0u8; 3]); n]);
     let mut shadow_ms = 0.0;
     for k in 0..n {
         if let Some(s) = &surfs[k] {
             let t0 = Instant::now();
-            let c = shade::shade(tr, s, &lit_by_beam[k * nl..(k + 1) * nl], &mut st);
+            let (c, sh) = shade::shade(tr, s, &lit_by_beam[k * nl..(k + 1) * nl], &mut st);
             shadow_ms += ms_since(t0);
             linear[k] = c;
+            shadowed[k] = sh;
             if let Some(nv) = normals.as_mut() {
                 nv[k] = output::normal_pixel(Some(s.n));
             }
@@ -985,6 +992,7 @@ fn render_tile(
             .map(|h| if h.is_some() { 1.0 } else { 0.0 })
             .collect(),
         linear,
+        shadowed,
         samples: vec![1; n],
         depth: tile
             .hits

@@ -276,14 +276,16 @@ pub(crate) fn shadow_beam(
 }
 
 /// Shades one surface point; `lit_by_beam[l]` says a shadow beam already
-/// proved light l visible.
+/// proved light l visible. Also returns which lights (bit l) face the
+/// point but are shadowed there, for anti-aliasing to find shadow edges.
 pub(crate) fn shade(
     tr: &Tracer<'_>,
     s: &Surf,
     lit_by_beam: &[bool],
     st: &mut RenderStats,
-) -> [f64; 3] {
+) -> ([f64; 3], u64) {
     let mut c = scale(s.color, AMBIENT);
+    let mut shadowed = 0u64;
     for (li, light) in tr.lights.iter().enumerate() {
         let Some((l, end)) = light_dir(tr, light.kind, s.p) else {
             continue;
@@ -295,6 +297,7 @@ pub(crate) fn shade(
         if light.shadows && !lit_by_beam.get(li).copied().unwrap_or(false) {
             st.shadow_rays += 1;
             if !segment_free(tr, point_box(s.q), &[s.q], end, s.min_w, st) {
+                shadowed |= 1u64.checked_shl(li as u32).unwrap_or(0);
                 continue;
             }
         }
@@ -304,5 +307,5 @@ pub(crate) fn shade(
             *out += light.color[ch] * (s.color[ch] * ndl + spec);
         }
     }
-    c
+    (c, shadowed)
 }
