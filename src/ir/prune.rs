@@ -37,6 +37,13 @@ pub struct Pruned {
 /// `f` restricted to the box `b` (see the module docs); `None` when no
 /// `min`/`max` node is decided there.
 pub fn prune(f: &Function, b: [Interval; 3]) -> Option<Pruned> {
+    prune_to_at_most(f, b, usize::MAX)
+}
+
+/// [`prune`], but `None` as well when more than `max_live` ops would stay
+/// live (checked before the pruned function is built, which is the costly
+/// part of a pruning that does not pay).
+pub fn prune_to_at_most(f: &Function, b: [Interval; 3], max_live: usize) -> Option<Pruned> {
     let iv = Interpreter::new(f.clone()).interval_values(b);
     let finite = |i: Interval| i.lo.is_finite() && i.hi.is_finite();
     // defined[i]: op i gives a finite number at every point of the box.
@@ -101,6 +108,12 @@ pub fn prune(f: &Function, b: [Interval; 3]) -> Option<Pruned> {
             }
         }
     }
+    let kept = (0..f.ops.len())
+        .filter(|&i| live[i] && alias[i] == i)
+        .count();
+    if kept > max_live {
+        return None;
+    }
     let mut b = Builder::new();
     let mut new_id: Vec<Option<ValueId>> = vec![None; f.ops.len()];
     for (i, op) in f.ops.iter().enumerate() {
@@ -124,6 +137,12 @@ mod tests {
     // when y's box reaches below 0 (sqrt may be NaN there).
     #[test]
     fn decides_ordered_branches_only() {
+        let kept = (0..f.ops.len())
+            .filter(|&i| live[i] && alias[i] == i)
+            .count();
+        if kept > max_live {
+            return None;
+        }
         let mut b = Builder::new();
         let (x, y) = (b.var(Var::X), b.var(Var::Y));
         let ten = b.constant(10.0);

@@ -295,11 +295,8 @@ pub(crate) fn prune_evals(
             } else {
                 PRUNE_GAIN_INTERPRETED
             };
-            let p = crate::ir::prune::prune(source, region)?;
+            let p = crate::ir::prune::prune_to_at_most(source, region, before / gain)?;
             let after = p.function.live_count();
-            if after * gain > before {
-                return None;
-            }
             any = true;
             *n = after;
             st.pruned_ops_before += before as u64;
