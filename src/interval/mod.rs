@@ -183,21 +183,29 @@ pub fn powi_point(x: f64, n: i32) -> f64 {
     powi_unsigned(x, n as u32)
 }
 
-fn powi_unsigned(x: f64, mut n: u32) -> f64 {
-    let mut result = 1.0;
+fn powi_unsigned(x: f64, n: u32) -> f64 {
+    binary_pow(x, n, |a, b| a * b)
+}
+
+/// x^n (n >= 0; 1 for n = 0) by binary exponentiation with `mul` as the
+/// product: the one algorithm behind the point `powi` and [`pow_up`], and
+/// unrolled the same way by the JIT.
+fn binary_pow(x: f64, mut n: u32, mul: impl Fn(f64, f64) -> f64) -> f64 {
+    let mut result: Option<f64> = None;
     let mut base = x;
-    let mut first = true;
     while n > 0 {
         if n & 1 == 1 {
-            result = if first { base } else { result * base };
-            first = false;
+            result = Some(match result {
+                None => base,
+                Some(r) => mul(r, base),
+            });
         }
         n >>= 1;
         if n > 0 {
-            base *= base;
+            base = mul(base, base);
         }
     }
-    result
+    result.unwrap_or(1.0)
 }
 
 /// An upper bound of `sign(v)·|v|^n` (n >= 1): binary exponentiation where
@@ -206,22 +214,8 @@ fn powi_unsigned(x: f64, mut n: u32) -> f64 {
 /// above; for `v < 0` it bounds `-magnitude` from above, i.e. the
 /// magnitude from below, and `|y|` of such a factor is again a lower
 /// bound of its magnitude, so every product stays an upper bound.
-pub(crate) fn pow_up(v: f64, mut n: u32) -> f64 {
-    let mut result: Option<f64> = None;
-    let mut base = v;
-    while n > 0 {
-        if n & 1 == 1 {
-            result = Some(match result {
-                None => base,
-                Some(r) => up(r * base.abs()),
-            });
-        }
-        n >>= 1;
-        if n > 0 {
-            base = up(base * base.abs());
-        }
-    }
-    result.unwrap_or(1.0)
+pub(crate) fn pow_up(v: f64, n: u32) -> f64 {
+    binary_pow(v, n, |a, b| up(a * b.abs()))
 }
 
 // Named methods rather than operator traits: every call site of an

@@ -535,52 +535,46 @@ impl Emitter<'_, '_> {
         Iv(self.b.ins().bitselect(b_nan, a.0, m))
     }
 
-    /// `interval::pow_up` on both lanes, unrolled for the constant `n`.
-    fn vpow_up(&mut self, v: Value, mut n: u64) -> Value {
-        let mut result: Option<Value> = None;
-        let mut base = v;
-        while n > 0 {
-            if n & 1 == 1 {
-                result = Some(match result {
-                    None => base,
-                    Some(r) => {
-                        let m = self.vabs(base);
-                        let p = self.b.ins().fmul(r, m);
-                        self.vup(p)
-                    }
-                });
-            }
-            n >>= 1;
-            if n > 0 {
-                let m = self.vabs(base);
-                let p = self.b.ins().fmul(base, m);
-                base = self.vup(p);
-            }
-        }
-        result.unwrap_or_else(|| self.vconst(1.0, 1.0))
-    }
-
-    /// `interval::powi_unsigned` unrolled for the constant `n`, in
-    /// round-to-nearest (the point semantics).
-    fn pow_unrolled(&mut self, x: Value, mut n: u64) -> Value {
+    /// `interval::binary_pow` unrolled for the constant `n`, with `mul`
+    /// emitting each product.
+    fn binary_pow(
+        &mut self,
+        x: Value,
+        mut n: u64,
+        one: impl Fn(&mut Self) -> Value,
+        mul: impl Fn(&mut Self, Value, Value) -> Value,
+    ) -> Value {
         let mut result: Option<Value> = None;
         let mut base = x;
         while n > 0 {
             if n & 1 == 1 {
                 result = Some(match result {
                     None => base,
-                    Some(r) => self.mul(r, base),
+                    Some(r) => mul(self, r, base),
                 });
             }
             n >>= 1;
             if n > 0 {
-                base = self.mul(base, base);
+                base = mul(self, base, base);
             }
         }
-        match result {
-            Some(r) => r,
-            None => self.c(1.0),
-        }
+        result.unwrap_or_else(|| one(self))
+    }
+
+    /// `interval::pow_up` on both lanes: products `up(x·|y|)`.
+    fn vpow_up(&mut self, v: Value, n: u64) -> Value {
+        let one = |e: &mut Self| e.vconst(1.0, 1.0);
+        self.binary_pow(v, n, one, |e, x, y| {
+            let m = e.vabs(y);
+            let p = e.b.ins().fmul(x, m);
+            e.vup(p)
+        })
+    }
+
+    /// `interval::powi_unsigned` unrolled for the constant `n`, in
+    /// round-to-nearest (the point semantics).
+    fn pow_unrolled(&mut self, x: Value, n: u64) -> Value {
+        self.binary_pow(x, n, |e| e.c(1.0), |e, a, b| e.mul(a, b))
     }
 
     /// `interval::powi_point` for the constant `n` (widened to i64 so that

@@ -112,6 +112,11 @@ pub fn box_hull(a: IBox, b: IBox) -> IBox {
     std::array::from_fn(|i| Interval::new(a[i].lo.min(b[i].lo), a[i].hi.max(b[i].hi)))
 }
 
+/// Whether `inner` lies in `outer` (false where a bound is NaN).
+pub fn box_within(inner: &IBox, outer: &IBox) -> bool {
+    (0..3).all(|i| outer[i].lo <= inner[i].lo && inner[i].hi <= outer[i].hi)
+}
+
 /// `a ∩ b`, or `None` when they do not meet.
 pub fn box_meet(a: IBox, b: IBox) -> Option<IBox> {
     let mut out = a;

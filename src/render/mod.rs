@@ -266,9 +266,6 @@ pub(crate) fn prune_evals(
     if !tr.prune || !tr.live_ops.iter().any(|&n| n >= PRUNE_MIN_OPS) {
         return None;
     }
-    let within = |inner: &IBox, outer: &IBox| {
-        (0..3).all(|i| outer[i].lo <= inner[i].lo && inner[i].hi <= outer[i].hi)
-    };
     let mut any = false;
     let mut live = tr.live_ops.clone();
     let evals = tr
@@ -284,7 +281,7 @@ pub(crate) fn prune_evals(
             // the old one; else start again from the whole function.
             let whole = e.whole().cloned().unwrap_or_else(|| Arc::clone(e));
             let (source, before) = match e.valid_region() {
-                Some(r) if !within(&region, &r) => {
+                Some(r) if !camera::box_within(&region, &r) => {
                     let f = whole.function()?;
                     (f, f.live_count())
                 }

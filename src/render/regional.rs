@@ -10,7 +10,7 @@
 
 use std::sync::Arc;
 
-use super::camera::IBox;
+use super::camera::{IBox, box_within, point_box};
 use crate::eval::{Evaluator, Grad, IntervalGrad};
 use crate::interval::Interval;
 use crate::ir::Function;
@@ -27,54 +27,41 @@ pub(crate) struct Regional {
 }
 
 impl Regional {
-    fn holds_box(&self, b: &IBox) -> bool {
-        (0..3).all(|i| self.region[i].lo <= b[i].lo && b[i].hi <= self.region[i].hi)
+    /// The evaluator for a box: the pruned one if the box lies in the
+    /// region.
+    fn for_box(&self, b: &IBox) -> &dyn Evaluator {
+        if box_within(b, &self.region) {
+            &self.pruned
+        } else {
+            self.whole.as_ref()
+        }
     }
 
-    fn holds_point(&self, p: [f64; 3]) -> bool {
-        (0..3).all(|i| self.region[i].contains(p[i]))
+    /// The evaluator for a point (see [`Self::for_box`]).
+    fn for_point(&self, p: [f64; 3]) -> &dyn Evaluator {
+        self.for_box(&point_box(p))
     }
 }
 
 impl Evaluator for Regional {
     fn point(&self, p: [f64; 3]) -> f64 {
-        if self.holds_point(p) {
-            self.pruned.point(p)
-        } else {
-            self.whole.point(p)
-        }
+        self.for_point(p).point(p)
     }
 
     fn point_grad(&self, p: [f64; 3]) -> Grad {
-        if self.holds_point(p) {
-            self.pruned.point_grad(p)
-        } else {
-            self.whole.point_grad(p)
-        }
+        self.for_point(p).point_grad(p)
     }
 
     fn interval(&self, b: [Interval; 3]) -> Interval {
-        if self.holds_box(&b) {
-            self.pruned.interval(b)
-        } else {
-            self.whole.interval(b)
-        }
+        self.for_box(&b).interval(b)
     }
 
     fn interval_grad(&self, b: [Interval; 3]) -> IntervalGrad {
-        if self.holds_box(&b) {
-            self.pruned.interval_grad(b)
-        } else {
-            self.whole.interval_grad(b)
-        }
+        self.for_box(&b).interval_grad(b)
     }
 
     fn interval_dir(&self, b: [Interval; 3], v: [Interval; 3]) -> [Interval; 2] {
-        if self.holds_box(&b) {
-            self.pruned.interval_dir(b, v)
-        } else {
-            self.whole.interval_dir(b, v)
-        }
+        self.for_box(&b).interval_dir(b, v)
     }
 
     /// The pruned function (exact on [`Evaluator::valid_region`]).
