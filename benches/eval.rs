@@ -5,10 +5,10 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use ibeam::eval::Evaluator;
+use ibeam::eval::interp::Interpreter;
+use ibeam::eval::jit::JitEvaluator;
 use ibeam::interval::Interval;
-use ibeam::ir::interp::Interpreter;
 use ibeam::ir::passes::simplify;
-use ibeam::jit::JitEvaluator;
 use std::hint::black_box;
 use std::path::Path;
 

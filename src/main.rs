@@ -1,8 +1,8 @@
 //! The `ibeam` command line: parses arguments and reports errors; each
-//! subcommand lives in `ibeam::cli`.
+//! subcommand lives in `cli`.
 
 use clap::{Parser, Subcommand};
-use ibeam::cli;
+mod cli;
 use std::process::ExitCode;
 
 /// Compile implicit surfaces to native code and ray trace them with
@@ -32,10 +32,10 @@ enum Command {
 const MAIN_STACK_BYTES: usize = 256 << 20;
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let args = Cli::parse();
     let worker = std::thread::Builder::new()
         .stack_size(MAIN_STACK_BYTES)
-        .spawn(move || match &cli.command {
+        .spawn(move || match &args.command {
             Command::Ir(a) => cli::ir::run(a),
             Command::Eval(a) => cli::eval::run(a),
             Command::Render(a) => cli::render::run(a),

@@ -4,10 +4,10 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use ibeam::bench::accuracy::{CSV_HEADER, default_variants, run_accuracy, sweep_scene};
 use ibeam::eval::Evaluator;
-use ibeam::ir::interp::Interpreter;
+use ibeam::eval::interp::Interpreter;
 use ibeam::ir::passes::simplify;
-use ibeam::render::accuracy::{CSV_HEADER, default_variants, run_accuracy, sweep_scene};
 use ibeam::render::{Aa, Method, RenderOptions, RenderOutput, render_aa};
 use ibeam::scene::Scene;
 

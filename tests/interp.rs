@@ -3,8 +3,8 @@
 mod common;
 
 use ibeam::eval::Evaluator;
+use ibeam::eval::interp::Interpreter;
 use ibeam::ir::Function;
-use ibeam::ir::interp::Interpreter;
 
 fn make(f: &Function) -> Box<dyn Evaluator> {
     Box::new(Interpreter::new(f.clone()))

@@ -8,11 +8,12 @@
 //! bound on degenerate intervals.
 
 use ibeam::eval::Evaluator;
+use ibeam::eval::interp::Interpreter;
 use ibeam::interval::{Interval, TRANSCENDENTAL_ULPS};
-use ibeam::ir::interp::{
-    Interpreter, interval_binary, interval_unary, point_binary, point_powi, point_unary,
-};
 use ibeam::ir::random::{BINARY_OPS, UNARY_OPS, random_function};
+use ibeam::ir::semantics::{
+    interval_binary, interval_unary, point_binary, point_powi, point_unary,
+};
 use ibeam::ir::{BinaryOp, UnaryOp};
 use proptest::prelude::*;
 

@@ -4,12 +4,13 @@
 
 mod common;
 
+use ibeam::eval::interp::Interpreter;
+use ibeam::eval::jit::{JitEvaluator, Kind, clif_text};
 use ibeam::eval::{Evaluator, Grad, IntervalGrad};
 use ibeam::interval::Interval;
-use ibeam::ir::interp::{Interpreter, point_binary, point_powi, point_unary};
 use ibeam::ir::random::{BINARY_OPS as BINARY, Rng, UNARY_OPS as UNARY, random_function};
+use ibeam::ir::semantics::{point_binary, point_powi, point_unary};
 use ibeam::ir::{BinaryOp, Builder, Function, Op, UnaryOp, ValueId, Var};
-use ibeam::jit::{JitEvaluator, Kind, clif_text};
 
 fn make(f: &Function) -> Box<dyn Evaluator> {
     Box::new(JitEvaluator::new(f).expect("compiles"))

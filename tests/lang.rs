@@ -4,7 +4,7 @@
 //! limits on deep and long inputs.
 
 use ibeam::eval::Evaluator;
-use ibeam::ir::interp::Interpreter;
+use ibeam::eval::interp::Interpreter;
 use ibeam::ir::{Function, Op};
 use ibeam::lang::{LoadError, function_from_formula, load_scene, load_scene_source};
 use ibeam::scene::{LightKind, Projection, Scene};

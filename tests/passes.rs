@@ -2,8 +2,8 @@
 //! specific rewrites happen.
 
 use ibeam::eval::Evaluator;
+use ibeam::eval::interp::Interpreter;
 use ibeam::interval::Interval;
-use ibeam::ir::interp::Interpreter;
 use ibeam::ir::passes::{PASSES, cse, dce, fold_constants, simplify, simplify_traced};
 use ibeam::ir::random::{Rng, random_function};
 use ibeam::ir::validate::validate;

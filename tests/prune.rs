@@ -3,9 +3,9 @@
 //! much shorter where a CSG tree has been decided.
 
 use ibeam::eval::Evaluator;
+use ibeam::eval::interp::Interpreter;
 use ibeam::interval::Interval;
 use ibeam::ir::Function;
-use ibeam::ir::interp::Interpreter;
 use ibeam::ir::prune::prune;
 use ibeam::ir::random::{Rng, random_function};
 use ibeam::ir::validate::validate;

@@ -14,10 +14,10 @@
 
 use std::sync::Arc;
 
-use ibeam::cli::{EvalKind, build_evaluators};
 use ibeam::eval::Evaluator;
+use ibeam::eval::interp::Interpreter;
+use ibeam::eval::{EvalKind, build_evaluators};
 use ibeam::interval::Interval;
-use ibeam::ir::interp::Interpreter;
 use ibeam::ir::passes;
 use ibeam::ir::random::Rng;
 use ibeam::render::{Method, RenderError, RenderOptions, render};

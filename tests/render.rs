@@ -812,7 +812,7 @@ fn pruning_draws_what_the_whole_function_draws() {
         }
     }
     for sc in &scenes {
-        let evals = ibeam::cli::build_evaluators(sc, ibeam::cli::EvalKind::Jit).unwrap();
+        let evals = ibeam::eval::build_evaluators(sc, ibeam::eval::EvalKind::Jit).unwrap();
         assert!(evals[0].function().unwrap().live_count() >= 64);
         let size = if scenes.len() > 2 && std::ptr::eq(sc, &scenes[2]) {
             128

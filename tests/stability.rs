@@ -15,8 +15,8 @@
 
 use std::sync::Arc;
 
-use ibeam::cli::{EvalKind, build_evaluators};
 use ibeam::eval::Evaluator;
+use ibeam::eval::{EvalKind, build_evaluators};
 use ibeam::ir::passes;
 use ibeam::render::camera::{PixelRay, RayCamera};
 use ibeam::render::{Method, RenderOptions, RenderOutput, render};

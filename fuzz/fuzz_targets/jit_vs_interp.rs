@@ -12,9 +12,9 @@
 
 use ibeam::eval::Evaluator;
 use ibeam::interval::Interval;
-use ibeam::ir::interp::Interpreter;
+use ibeam::eval::interp::Interpreter;
 use ibeam::ir::{Function, passes, random};
-use ibeam::jit::JitEvaluator;
+use ibeam::eval::jit::JitEvaluator;
 use libfuzzer_sys::fuzz_target;
 
 /// Reads f64s from the bytes, 8 at a time, mapped to a useful range: most

@@ -1,13 +1,13 @@
 //! `ibeam bench accuracy`: time against error of every method and
 //! anti-aliasing mode, against a 16×16-supersampled guaranteed reference
-//! (see [`crate::render::accuracy`]). Ready to be wired in as a `bench`
+//! (see [`ibeam::bench::accuracy`]). Ready to be wired in as a `bench`
 //! subcommand: `What::Accuracy(accuracy::Args)` → `accuracy::run`.
 
 use std::path::PathBuf;
 
 use super::{CliError, EvalKind};
-use crate::render::MAX_SIZE;
-use crate::render::accuracy::run_accuracy;
+use ibeam::bench::accuracy::run_accuracy;
+use ibeam::render::MAX_SIZE;
 
 /// Arguments of `ibeam bench accuracy`.
 #[derive(clap::Args, Debug)]
@@ -37,7 +37,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         args.scenes.clone()
     };
     let kind = args.eval;
-    let make = move |scene: &crate::scene::Scene| {
+    let make = move |scene: &ibeam::scene::Scene| {
         super::build_evaluators(scene, kind).map_err(|e| e.to_string())
     };
     let rows = run_accuracy(&scenes, &args.out, args.size, &make)?;

@@ -2,10 +2,10 @@
 //! same run, so every speed claim in the README can be rerun.
 
 use super::{CliError, EvalKind, build_evaluator};
-use crate::eval::Evaluator;
-use crate::interval::Interval;
-use crate::ir::passes::simplify;
-use crate::jit::JitEvaluator;
+use ibeam::eval::Evaluator;
+use ibeam::eval::jit::JitEvaluator;
+use ibeam::interval::Interval;
+use ibeam::ir::passes::simplify;
 use std::hint::black_box;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -122,7 +122,7 @@ fn bench_eval(args: &EvalArgs) -> Result<(), CliError> {
     );
     println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for file in &files {
-        let scene = crate::lang::load_scene(file)?;
+        let scene = ibeam::lang::load_scene(file)?;
         let object = &scene.objects[0];
         let f = simplify(&object.function);
         let interp = build_evaluator(&f, EvalKind::Interp)?;
@@ -214,7 +214,7 @@ fn si(v: f64) -> String {
 }
 
 fn bench_render(args: &RenderArgs) -> Result<(), CliError> {
-    use crate::render::{Method, RenderOptions, render};
+    use ibeam::render::{Method, RenderOptions, render};
     let files = if args.files.is_empty() {
         let mut files: Vec<PathBuf> = ["orthocircle", "metaballs", "drop", "tangle_cube", "csg"]
             .iter()
@@ -234,13 +234,13 @@ fn bench_render(args: &RenderArgs) -> Result<(), CliError> {
     println!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|");
     let mut skipped = std::collections::BTreeSet::new();
     for file in &files {
-        let scene = crate::lang::load_scene(file)?;
+        let scene = ibeam::lang::load_scene(file)?;
         let evaluators = super::build_evaluators(&scene, EvalKind::Jit)?;
         for &size in &args.sizes {
             let mut pixel_rays = None;
             let mut rows = Vec::new();
             for name in &args.methods {
-                if name == "point" && crate::render::is_flat(&scene) {
+                if name == "point" && ibeam::render::is_flat(&scene) {
                     // Marching a 2D model along its missing axis measures
                     // nothing (f is constant along every ray) and takes
                     // minutes: leave the row out, and say so below.

@@ -1,7 +1,7 @@
 //! `ibeam eval`: evaluate each object at a point or over a box.
 
 use super::{CliError, EvalKind, build_evaluators, emit, parse_numbers};
-use crate::interval::Interval;
+use ibeam::interval::Interval;
 use std::fmt::Write;
 
 /// Arguments of `ibeam eval`.
@@ -29,7 +29,7 @@ pub struct Args {
 /// Runs `ibeam eval`. Numbers print with `{:e}`, the shortest text that
 /// reads back as the same f64.
 pub fn run(args: &Args) -> Result<(), CliError> {
-    let scene = crate::lang::load_scene(&args.file)?;
+    let scene = ibeam::lang::load_scene(&args.file)?;
     let evaluators = build_evaluators(&scene, args.eval)?;
     let mut out = String::new();
     for (object, eval) in scene.objects.iter().zip(&evaluators) {

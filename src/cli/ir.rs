@@ -1,9 +1,9 @@
 //! `ibeam ir`: print what the compiler makes of a scene.
 
 use super::CliError;
-use crate::ir::passes::{simplify, simplify_traced};
-use crate::ir::print::{op_counts, print};
-use crate::jit::{JitEvaluator, clif_text};
+use ibeam::eval::jit::{JitEvaluator, clif_text};
+use ibeam::ir::passes::{simplify, simplify_traced};
+use ibeam::ir::print::{op_counts, print};
 use std::fmt::Write;
 
 /// Arguments of `ibeam ir`.
@@ -25,7 +25,7 @@ pub struct Args {
 
 /// Runs `ibeam ir`.
 pub fn run(args: &Args) -> Result<(), CliError> {
-    let scene = crate::lang::load_scene(&args.file)?;
+    let scene = ibeam::lang::load_scene(&args.file)?;
     let mut out = String::new();
     for object in &scene.objects {
         let _ = writeln!(out, "; object {}", object.name);
@@ -54,8 +54,8 @@ pub fn run(args: &Args) -> Result<(), CliError> {
 
 fn write_stats(
     out: &mut String,
-    before: &crate::ir::Function,
-    after: &crate::ir::Function,
+    before: &ibeam::ir::Function,
+    after: &ibeam::ir::Function,
 ) -> Result<(), CliError> {
     let (counts_before, total_before) = op_counts(before);
     let (counts_after, total_after) = op_counts(after);

@@ -1,5 +1,6 @@
-//! The command-line interface: one module per subcommand; `main.rs` only
-//! parses arguments and reports errors.
+//! The command-line interface (part of the binary, not the library): one
+//! module per subcommand; `main.rs` only parses arguments and reports
+//! errors.
 
 pub mod accuracy;
 pub mod bench;
@@ -7,51 +8,10 @@ pub mod eval;
 pub mod ir;
 pub mod render;
 
-use crate::eval::Evaluator;
-use crate::ir::interp::Interpreter;
-use crate::ir::passes::simplify;
-use crate::jit::JitEvaluator;
-use crate::scene::Scene;
-use std::sync::Arc;
+pub use ibeam::eval::{EvalKind, build_evaluator, build_evaluators};
 
 /// The error type of every subcommand: printed to stderr, exit code 1.
 pub type CliError = Box<dyn std::error::Error + Send + Sync>;
-
-/// Which implementation evaluates the surface functions.
-#[derive(Copy, Clone, Debug, PartialEq, Eq, clap::ValueEnum, Default)]
-pub enum EvalKind {
-    /// Native code compiled by Cranelift (default).
-    #[default]
-    Jit,
-    /// The reference interpreter: slower, and the oracle for the JIT.
-    Interp,
-}
-
-/// An evaluator of `kind` for an already simplified function.
-pub fn build_evaluator(
-    f: &crate::ir::Function,
-    kind: EvalKind,
-) -> Result<Arc<dyn Evaluator>, CliError> {
-    Ok(match kind {
-        EvalKind::Jit => Arc::new(JitEvaluator::new(f)?),
-        EvalKind::Interp => Arc::new(Interpreter::new(f.clone())),
-    })
-}
-
-/// One evaluator per scene object, each for the object's simplified
-/// function, built by `kind`. The JIT compiles each evaluator kind lazily,
-/// on first use, so this is cheap; compile time shows up in the first
-/// render phase that needs it.
-pub fn build_evaluators(
-    scene: &Scene,
-    kind: EvalKind,
-) -> Result<Vec<Arc<dyn Evaluator>>, CliError> {
-    scene
-        .objects
-        .iter()
-        .map(|o| build_evaluator(&simplify(&o.function), kind))
-        .collect()
-}
 
 /// Parses `a,b,c,...` into exactly `n` finite numbers.
 pub fn parse_numbers(text: &str, n: usize, what: &str) -> Result<Vec<f64>, CliError> {

@@ -6,9 +6,9 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use super::{CliError, EvalKind};
-use crate::render::aa::{DEFAULT_DEPTH, DEFAULT_THRESHOLD, MAX_DEPTH};
-use crate::render::camera::RayCamera;
-use crate::render::{Aa, MAX_SIZE, Method, RenderOptions, render_aa};
+use ibeam::render::aa::{DEFAULT_DEPTH, DEFAULT_THRESHOLD, MAX_DEPTH};
+use ibeam::render::camera::RayCamera;
+use ibeam::render::{Aa, MAX_SIZE, Method, RenderOptions, render_aa};
 
 /// Visibility method on the command line.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, clap::ValueEnum, Default)]
@@ -185,7 +185,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     for p in std::iter::once(&args.output).chain(extra.into_iter().flatten()) {
         outputs.claim(p)?;
     }
-    let scene = crate::lang::load_scene(&args.file)?;
+    let scene = ibeam::lang::load_scene(&args.file)?;
     if scene.objects.is_empty() {
         return Err(format!("{}: the scene has no objects", args.file.display()).into());
     }

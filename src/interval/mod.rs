@@ -3,12 +3,12 @@
 //! # Guarantee
 //! For every op `F` here and every box of argument intervals, `F(A, B)`
 //! contains `f(a, b)` for every `a ∈ A`, `b ∈ B` where the point op `f`
-//! (see [`crate::ir::Op`]) gives a real (finite or not NaN) value. Rounding
+//! (see `ir::Op`) gives a real (finite or not NaN) value. Rounding
 //! error is covered: the hardware computes in round-to-nearest, and each
 //! bound is then moved outward by one or two ulps ([`up`], [`down`]), which
 //! covers the half-ulp error of a correctly rounded `+ - * / sqrt`.
 //! Transcendentals call `libm`, whose stated error is below 1 ulp; we widen
-//! their results by [`TRANSCENDENTAL_ULPS`] ulps. The JIT (`crate::jit`)
+//! their results by [`TRANSCENDENTAL_ULPS`] ulps. The JIT (`eval::jit`)
 //! implements the same rules and is tested against this module.
 //!
 //! # Partial domains (IEEE 1788 style)
@@ -104,7 +104,7 @@ const TINY: f64 = f64::from_bits(1);
 /// `v`. `up(+inf) = +inf` and `up(NaN)` is NaN; `up(-inf)` is just above
 /// `-MAX`, the right bound when a sum or product overflowed to `-inf`.
 /// It is branch-free and costs the same in both lanes of a SIMD register,
-/// which is why the JIT's intervals use it (see `crate::jit`); this
+/// which is why the JIT's intervals use it (see `eval::jit`); this
 /// function is the reference the JIT must match bit for bit.
 #[inline]
 pub fn up(v: f64) -> f64 {

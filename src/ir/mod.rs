@@ -18,12 +18,11 @@
 //! keep no hidden state. [`validate::validate`] checks the contract and runs
 //! after lowering and after every pass in debug builds and in tests.
 
-pub mod interp;
-pub mod lower;
 pub mod passes;
 pub mod print;
 pub mod prune;
 pub mod random;
+pub mod semantics;
 pub mod validate;
 
 use std::collections::HashMap;

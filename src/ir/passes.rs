@@ -47,7 +47,7 @@
 //! pow(a, 0), atan2(0, x > 0)). An inexact constant would lose the outward
 //! rounding its interval gets at run time.
 
-use super::interp::{point_binary, point_powi, point_unary};
+use super::semantics::{point_binary, point_powi, point_unary};
 use super::validate::debug_validate;
 use super::{BinaryOp, Builder, Function, Op, UnaryOp, ValueId};
 

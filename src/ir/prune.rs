@@ -21,7 +21,7 @@
 //! inside its domain (`sqrt` of a non-negative, `ln` of a positive,
 //! division by an interval without 0, and so on).
 
-use super::interp::Interpreter;
+use super::semantics::run_interval;
 use super::{BinaryOp, Builder, Function, Op, UnaryOp, ValueId};
 use crate::interval::Interval;
 
@@ -44,7 +44,8 @@ pub fn prune(f: &Function, b: [Interval; 3]) -> Option<Pruned> {
 /// live (checked before the pruned function is built, which is the costly
 /// part of a pruning that does not pay).
 pub fn prune_to_at_most(f: &Function, b: [Interval; 3], max_live: usize) -> Option<Pruned> {
-    let iv = Interpreter::new(f.clone()).interval_values(b);
+    let mut iv = Vec::with_capacity(f.ops.len());
+    run_interval(&f.ops, b, &mut iv);
     let finite = |i: Interval| i.lo.is_finite() && i.hi.is_finite();
     // defined[i]: op i gives a finite number at every point of the box.
     let mut defined = vec![false; f.ops.len()];

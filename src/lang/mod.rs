@@ -7,12 +7,13 @@
 pub mod ast;
 pub mod diag;
 pub mod lexer;
+pub mod lower;
 pub mod parser;
 pub mod scene;
 pub mod vm;
 
 use crate::ir::Function;
-use crate::ir::lower::Program;
+use crate::lang::lower::Program;
 use crate::scene::Scene;
 use diag::Sources;
 use std::fmt;

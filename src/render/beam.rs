@@ -232,7 +232,7 @@ fn block(
 // Width of the window a split block prunes its functions to, in units of
 // its first candidate piece: its sub-blocks and rays evaluate mostly there
 // (evaluations outside it use the unpruned functions, see
-// `super::regional`).
+// `crate::eval::regional`).
 const PRUNE_WINDOW: f64 = 8.0;
 
 // `split`, with the functions first pruned to the block's beam over

@@ -14,7 +14,7 @@
 //! [`aa`] adds anti-aliasing on top of any method ([`render_aa`]):
 //! interval adaptive (extra samples only where a pixel's beam cannot
 //! prove one smoothly lit surface) or regular grid supersampling;
-//! [`accuracy`] measures every method against a supersampled reference.
+//! `crate::bench::accuracy` measures every method against a supersampled reference.
 //!
 //! The scene function is the minimum over the objects; the object hit is
 //! the one whose own f is smallest at the hit point. Output is identical
@@ -22,12 +22,10 @@
 //! results and counters are merged in tile order.
 
 pub mod aa;
-pub mod accuracy;
 pub mod beam;
 pub mod camera;
 pub mod output;
 pub mod ray;
-mod regional;
 pub mod shade;
 pub mod stats;
 
@@ -231,7 +229,7 @@ const PRUNE_GAIN_INTERPRETED: usize = 2;
 /// bounds, which the tracer's own boxes overhang by rounding), widened by
 /// a relative 1e-9 so that boxes the tracer rounds outward stay inside it.
 /// An evaluation that still falls outside uses the whole function (see
-/// `regional`).
+/// `crate::eval::regional`).
 pub(crate) fn beam_region(
     tr: &Tracer<'_>,
     xs: (f64, f64),
@@ -298,9 +296,9 @@ pub(crate) fn prune_evals(
             *n = after;
             st.pruned_ops_before += before as u64;
             st.pruned_ops_after += after as u64;
-            Some(Arc::new(regional::Regional {
+            Some(Arc::new(crate::eval::regional::Regional {
                 region,
-                pruned: crate::ir::interp::Interpreter::new(p.function),
+                pruned: crate::eval::interp::Interpreter::new(p.function),
                 whole,
             }) as Arc<dyn Evaluator>)
         })
@@ -534,7 +532,7 @@ pub fn render_aa(
     for (o, e) in scene.objects.iter().zip(evaluators) {
         // The interpreter answers this one question without compiling.
         let f = match e.function() {
-            Some(f) => crate::ir::interp::Interpreter::new(f.clone()).interval(whole),
+            Some(f) => crate::eval::interp::Interpreter::new(f.clone()).interval(whole),
             None => e.interval(whole),
         };
         if f.is_empty() {

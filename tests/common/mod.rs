@@ -10,9 +10,10 @@
 #![allow(dead_code)]
 
 use ibeam::eval::Evaluator;
+use ibeam::eval::interp::Interpreter;
 use ibeam::interval::Interval;
-use ibeam::ir::interp::{Interpreter, point_binary, point_powi, point_unary};
 use ibeam::ir::random::{BINARY_OPS, Rng, UNARY_OPS, random_function};
+use ibeam::ir::semantics::{point_binary, point_powi, point_unary};
 use ibeam::ir::{BinaryOp, Builder, Function, UnaryOp, Var};
 
 /// Builds the evaluator under test for a function.

@@ -10,14 +10,14 @@
 
 use std::sync::Arc;
 
-use super::camera::{IBox, box_within, point_box};
+use crate::eval::interp::Interpreter;
 use crate::eval::{Evaluator, Grad, IntervalGrad};
 use crate::interval::Interval;
 use crate::ir::Function;
-use crate::ir::interp::Interpreter;
+use crate::render::camera::{IBox, box_within, point_box};
 
 /// `pruned` on `region`, `whole` elsewhere.
-pub(crate) struct Regional {
+pub struct Regional {
     /// Where `pruned` equals the whole function.
     pub region: IBox,
     /// The function pruned to `region`, interpreted.

@@ -6,7 +6,7 @@
 //! how Cranelift's two-f64-result signature reads them).
 
 use crate::interval::Interval;
-use crate::ir::interp::{point_binary, point_unary};
+use crate::ir::semantics::{point_binary, point_unary};
 use crate::ir::{BinaryOp, UnaryOp};
 
 extern "C" fn point_exp(a: f64) -> f64 {

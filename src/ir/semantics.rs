@@ -1,11 +1,8 @@
-//! Reference evaluators over the IR in plain Rust: the oracle the JIT is
-//! tested against, and the baseline of its benchmarks.
-//!
-//! [`Interpreter`] walks the op list once per call with one `match` per op,
-//! storing values in a per-thread scratch vector (no allocation per call
-//! once warm). It implements all four evaluations of
-//! [`Evaluator`]: point values, forward-mode gradients (dual numbers),
-//! intervals, and interval gradients (interval dual numbers).
+//! What each op means: its point rule, its interval rule and its
+//! derivative rules (point and interval dual numbers), written once. The
+//! reference interpreter (`eval::interp`) is a loop over these; the JIT
+//! calls the point rules for the transcendentals and is tested to give the
+//! same bits as all of them.
 //!
 //! # Derivative rules
 //! The rules live in [`grad_unary`], [`grad_binary`], [`grad_powi`] and
@@ -45,10 +42,27 @@
 //! gradients follow the same rule over the defined part (the ln derivative
 //! `1/a` over the non-negative part of `a`, and so on).
 
-use super::{BinaryOp, Function, Op, UnaryOp};
-use crate::eval::{Evaluator, Grad, IntervalGrad};
+use super::{BinaryOp, Op, UnaryOp};
 use crate::interval::{Interval, max_nan, min_nan, powi_point};
-use std::cell::RefCell;
+
+/// A point value and its gradient (∂f/∂x, ∂f/∂y, ∂f/∂z).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Grad {
+    /// f at the point.
+    pub v: f64,
+    /// The partial derivatives.
+    pub d: [f64; 3],
+}
+
+/// An interval of f over a box and an interval for each partial derivative.
+#[derive(Copy, Clone, Debug, PartialEq)]
+#[repr(C)]
+pub struct IntervalGrad {
+    /// f over the box.
+    pub v: Interval,
+    /// ∂f/∂x, ∂f/∂y, ∂f/∂z over the box.
+    pub d: [Interval; 3],
+}
 
 /// Point semantics of a one-operand op (the JIT calls this for the
 /// transcendentals, so both give identical bits).
@@ -392,62 +406,8 @@ pub fn igrad_powi(a: IntervalGrad, n: i32) -> IntervalGrad {
     iscale(Interval::point(f64::from(n)).mul(a.v.powi(n - 1)), a, v)
 }
 
-/// The reference evaluator: walks the op list once per evaluation.
-#[derive(Clone, Debug)]
-pub struct Interpreter {
-    f: Function,
-}
-
-// Per-thread value slots, reused across calls so an evaluation allocates
-// nothing once the vectors have grown to the largest function seen.
-#[derive(Default)]
-struct Scratch {
-    point: Vec<f64>,
-    grad: Vec<Grad>,
-    interval: Vec<Interval>,
-    igrad: Vec<IntervalGrad>,
-}
-
-thread_local! {
-    static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
-}
-
-impl Interpreter {
-    /// An interpreter for `f`, which must be valid IR (checked in debug
-    /// builds; see [`Interpreter::try_new`] for untrusted input).
-    pub fn new(f: Function) -> Interpreter {
-        super::validate::debug_validate(&f, "Interpreter::new");
-        Interpreter { f }
-    }
-
-    /// An interpreter for `f`, or why `f` is not valid IR.
-    pub fn try_new(f: Function) -> Result<Interpreter, super::validate::InvalidIr> {
-        super::validate::validate(&f)?;
-        Ok(Interpreter { f })
-    }
-
-    /// The function it evaluates.
-    pub fn function(&self) -> &Function {
-        &self.f
-    }
-
-    /// Every value of the function at `p`, in op order (for tests and
-    /// debugging: which op first went NaN, and so on).
-    pub fn point_values(&self, p: [f64; 3]) -> Vec<f64> {
-        let mut vals = Vec::with_capacity(self.f.ops.len());
-        run_point(&self.f.ops, p, &mut vals);
-        vals
-    }
-
-    /// Every interval of the function over `b`, in op order.
-    pub fn interval_values(&self, b: [Interval; 3]) -> Vec<Interval> {
-        let mut vals = Vec::with_capacity(self.f.ops.len());
-        run_interval(&self.f.ops, b, &mut vals);
-        vals
-    }
-}
-
-fn run_point(ops: &[Op], p: [f64; 3], vals: &mut Vec<f64>) {
+/// Every value of the function `ops` at `p`, in op order, into `vals`.
+pub fn run_point(ops: &[Op], p: [f64; 3], vals: &mut Vec<f64>) {
     vals.clear();
     for op in ops {
         let v = match *op {
@@ -461,7 +421,9 @@ fn run_point(ops: &[Op], p: [f64; 3], vals: &mut Vec<f64>) {
     }
 }
 
-fn run_interval(ops: &[Op], b: [Interval; 3], vals: &mut Vec<Interval>) {
+/// Every interval of the function `ops` over `b`, in op order, into
+/// `vals`.
+pub fn run_interval(ops: &[Op], b: [Interval; 3], vals: &mut Vec<Interval>) {
     vals.clear();
     for op in ops {
         let v = match *op {
@@ -472,134 +434,5 @@ fn run_interval(ops: &[Op], b: [Interval; 3], vals: &mut Vec<Interval>) {
             Op::Powi(a, n) => vals[a.index()].powi(n),
         };
         vals.push(v);
-    }
-}
-
-fn run_grad(ops: &[Op], p: [f64; 3], vals: &mut Vec<Grad>) {
-    vals.clear();
-    for op in ops {
-        let v = match *op {
-            Op::Var(var) => {
-                let mut d = [0.0; 3];
-                d[var.index()] = 1.0;
-                Grad {
-                    v: p[var.index()],
-                    d,
-                }
-            }
-            Op::Const(c) => Grad { v: c, d: [0.0; 3] },
-            Op::Unary(u, a) => grad_unary(u, vals[a.index()]),
-            Op::Binary(o, a, b) => grad_binary(o, vals[a.index()], vals[b.index()]),
-            Op::Powi(a, n) => grad_powi(vals[a.index()], n),
-        };
-        vals.push(v);
-    }
-}
-
-/// Forward mode over a box; the partials of coordinate k start as
-/// `seed[k]` (unit vectors for the gradient, `[v_k, 0, 0]` for the
-/// derivative along v).
-fn run_igrad(ops: &[Op], b: [Interval; 3], seed: [[Interval; 3]; 3], vals: &mut Vec<IntervalGrad>) {
-    vals.clear();
-    for op in ops {
-        let v = match *op {
-            Op::Var(var) => IntervalGrad {
-                v: b[var.index()],
-                d: seed[var.index()],
-            },
-            Op::Const(c) => IntervalGrad {
-                v: Interval::point(c),
-                d: [Interval::point(0.0); 3],
-            },
-            Op::Unary(u, a) => igrad_unary(u, vals[a.index()]),
-            Op::Binary(o, x, y) => igrad_binary(o, vals[x.index()], vals[y.index()]),
-            Op::Powi(a, n) => igrad_powi(vals[a.index()], n),
-        };
-        vals.push(v);
-    }
-}
-
-impl Evaluator for Interpreter {
-    fn function(&self) -> Option<&Function> {
-        Some(&self.f)
-    }
-
-    fn point(&self, p: [f64; 3]) -> f64 {
-        SCRATCH.with_borrow_mut(|s| {
-            run_point(&self.f.ops, p, &mut s.point);
-            s.point[self.f.root.index()]
-        })
-    }
-
-    fn point_grad(&self, p: [f64; 3]) -> Grad {
-        SCRATCH.with_borrow_mut(|s| {
-            run_grad(&self.f.ops, p, &mut s.grad);
-            s.grad[self.f.root.index()]
-        })
-    }
-
-    fn interval(&self, b: [Interval; 3]) -> Interval {
-        SCRATCH.with_borrow_mut(|s| {
-            run_interval(&self.f.ops, b, &mut s.interval);
-            s.interval[self.f.root.index()]
-        })
-    }
-
-    fn interval_grad(&self, b: [Interval; 3]) -> IntervalGrad {
-        let (o, z) = (Interval::point(1.0), Interval::point(0.0));
-        let unit = [[o, z, z], [z, o, z], [z, z, o]];
-        SCRATCH.with_borrow_mut(|s| {
-            run_igrad(&self.f.ops, b, unit, &mut s.igrad);
-            s.igrad[self.f.root.index()]
-        })
-    }
-
-    fn interval_dir(&self, b: [Interval; 3], v: [Interval; 3]) -> [Interval; 2] {
-        let z = Interval::point(0.0);
-        let seed = v.map(|vk| [vk, z, z]);
-        SCRATCH.with_borrow_mut(|s| {
-            run_igrad(&self.f.ops, b, seed, &mut s.igrad);
-            let r = s.igrad[self.f.root.index()];
-            [r.v, r.d[0]]
-        })
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::ir::{Builder, Var};
-
-    #[test]
-    fn evaluates_sphere_and_gradient() {
-        let mut b = Builder::new();
-        let x = b.var(Var::X);
-        let y = b.var(Var::Y);
-        let xx = b.unary(UnaryOp::Square, x);
-        let yy = b.powi(y, 2);
-        let s = b.binary(BinaryOp::Add, xx, yy);
-        let one = b.constant(1.0);
-        let r = b.binary(BinaryOp::Sub, s, one);
-        let it = Interpreter::new(b.finish(r));
-        assert_eq!(it.point([3.0, 4.0, 0.0]), 24.0);
-        assert_eq!(it.point_grad([3.0, 4.0, 9.0]).d, [6.0, 8.0, 0.0]);
-        let i = it.interval([
-            Interval::new(-1.0, 2.0),
-            Interval::point(0.0),
-            Interval::ENTIRE,
-        ]);
-        assert!(i.contains(-1.0) && i.contains(3.0) && i.hi < 3.001 && i.lo > -1.001);
-    }
-
-    #[test]
-    fn zero_partials_survive_infinite_derivatives() {
-        // sqrt(x) + y at x = 0: d/dy is exactly 1, not NaN.
-        let mut b = Builder::new();
-        let x = b.var(Var::X);
-        let y = b.var(Var::Y);
-        let s = b.unary(UnaryOp::Sqrt, x);
-        let r = b.binary(BinaryOp::Add, s, y);
-        let g = Interpreter::new(b.finish(r)).point_grad([0.0, 1.0, 0.0]);
-        assert_eq!(g.d, [f64::INFINITY, 1.0, 0.0]);
     }
 }

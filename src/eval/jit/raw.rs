@@ -1,6 +1,6 @@
 //! The one module with `unsafe`: owning JIT memory and calling into it.
 //!
-//! Everything else in `crate::jit` builds CLIF and manages lifetimes in safe
+//! Everything else in `crate::eval::jit` builds CLIF and manages lifetimes in safe
 //! code; here a finalized function address becomes a typed `extern "C"` fn
 //! pointer that lives exactly as long as the `JITModule` holding its code.
 

@@ -2,7 +2,7 @@
 //!
 //! [`JitEvaluator`] compiles each evaluator kind of [`crate::eval::Evaluator`]
 //! on its first use (so a scene pays only for what it needs) and gives the
-//! same answers as the reference in [`crate::ir::interp`] and
+//! same answers as the reference in [`crate::eval::interp`] and
 //! [`crate::interval`]: point values bit for bit (NaN payloads aside),
 //! intervals bit for bit for the arithmetic ops, and transcendentals through
 //! `extern "C"` calls to the very Rust functions the reference uses.
@@ -14,7 +14,7 @@
 //! let (x, y) = (b.var(Var::X), b.var(Var::Y));
 //! let r = b.binary(BinaryOp::Mul, x, y);
 //! let f = b.finish(r);
-//! let jit = ibeam::jit::JitEvaluator::new(&f).unwrap();
+//! let jit = ibeam::eval::jit::JitEvaluator::new(&f).unwrap();
 //! assert_eq!(jit.point([2.0, 3.0, 0.0]), 6.0);
 //! assert_eq!(jit.compile_times().len(), 1); // only `point` was compiled
 //! ```
@@ -35,6 +35,7 @@
 
 mod emit;
 mod lower;
+#[allow(unsafe_code)] // the one module that calls JIT code and frees its memory
 mod raw;
 mod shims;
 

@@ -26,8 +26,8 @@ use std::sync::{Arc, OnceLock};
 
 use plotters::prelude::*;
 
-use super::{Aa, Method, RenderError, RenderOptions, RenderOutput, render_aa};
 use crate::eval::Evaluator;
+use crate::render::{Aa, Method, RenderError, RenderOptions, RenderOutput, render_aa};
 use crate::scene::Scene;
 
 /// The reference: guaranteed per-pixel rays, 16×16 per pixel.
@@ -94,7 +94,7 @@ pub fn default_variants() -> Vec<Variant> {
             Method::Beam,
             Aa::Iaa {
                 threshold: 1.0 / f64::from(d),
-                depth: super::aa::DEFAULT_DEPTH,
+                depth: crate::render::aa::DEFAULT_DEPTH,
             },
         ));
     }

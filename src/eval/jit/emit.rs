@@ -5,7 +5,7 @@
 //! are upper bounds, so one SIMD rounding step (`interval::up`, branch-free)
 //! rounds both bounds outward, and most ops are a handful of packed
 //! instructions. Every helper here mirrors one function of
-//! `crate::interval` or `crate::ir::interp` step by step, so that the native
+//! `crate::interval` or `crate::eval::interp` step by step, so that the native
 //! code gives the same bits (NaN payloads aside).
 
 use cranelift_codegen::ir::condcodes::FloatCC;

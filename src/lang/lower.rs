@@ -17,8 +17,8 @@
 //! [`MAX_CALL_DEPTH`] deep, and lowering gives up after [`MAX_STEPS`] steps,
 //! so no input makes lowering overflow the stack or run away.
 
-use super::interp::{point_binary, point_powi, point_unary};
-use super::{BinaryOp, Builder, Function, Op, UnaryOp, ValueId, Var};
+use crate::ir::semantics::{point_binary, point_powi, point_unary};
+use crate::ir::{BinaryOp, Builder, Function, Op, UnaryOp, ValueId, Var};
 use crate::lang::ast::{AddOp, Expr, ExprKind, Ident, Item, MulOp, Span};
 use crate::lang::diag::Diag;
 use std::collections::HashMap;

@@ -1,26 +1,17 @@
-//! The evaluator interface shared by the reference interpreter
-//! ([`crate::ir::interp`]) and the native code from [`crate::jit`].
+//! Evaluators: the interface the tracer calls ([`Evaluator`]), the
+//! reference interpreter ([`interp`]), native code from Cranelift ([`jit`]),
+//! the regional evaluator that answers with a function pruned to a region
+//! ([`regional`]), and building a scene's evaluators ([`build`]).
+
+pub mod build;
+pub mod interp;
+pub mod jit;
+pub mod regional;
+
+pub use crate::ir::semantics::{Grad, IntervalGrad};
+pub use build::{EvalKind, build_evaluator, build_evaluators};
 
 use crate::interval::Interval;
-
-/// A point value and its gradient (∂f/∂x, ∂f/∂y, ∂f/∂z).
-#[derive(Copy, Clone, Debug, PartialEq)]
-pub struct Grad {
-    /// f at the point.
-    pub v: f64,
-    /// The partial derivatives.
-    pub d: [f64; 3],
-}
-
-/// An interval of f over a box and an interval for each partial derivative.
-#[derive(Copy, Clone, Debug, PartialEq)]
-#[repr(C)]
-pub struct IntervalGrad {
-    /// f over the box.
-    pub v: Interval,
-    /// ∂f/∂x, ∂f/∂y, ∂f/∂z over the box.
-    pub d: [Interval; 3],
-}
 
 /// Evaluates one surface function in the four ways the tracer needs.
 ///

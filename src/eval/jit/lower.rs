@@ -354,7 +354,7 @@ impl Num for Value {
     }
     /// At a point the derivative formula holds off the cut, and the cut
     /// itself is a measure-zero set the point evaluators do not special-case
-    /// (as `ir::interp::grad_binary`).
+    /// (as `ir::semantics::grad_binary`).
     fn atan2_cut(_: &mut Emitter, _: Self, _: Self, d: Self) -> Self {
         d
     }
@@ -416,7 +416,7 @@ impl Num for Iv {
         let both = e.iv_hull(da, db);
         pick(e, a_first, da, b_first, db, both)
     }
-    /// As `ir::interp::igrad_binary`: a box with `b.lo <= 0` and
+    /// As `ir::semantics::igrad_binary`: a box with `b.lo <= 0` and
     /// `0 ∈ a` touches the cut, where no finite bound on the rate of change
     /// exists, so the partial is the whole line. (Partials known to be
     /// exactly zero never reach here: they stay zero, as in the reference.)

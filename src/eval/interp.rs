@@ -1,0 +1,200 @@
+//! The reference interpreter: the oracle the JIT is tested against, and
+//! the baseline of its benchmarks.
+//!
+//! [`Interpreter`] walks the op list once per call with one `match` per op
+//! (the rules are in [`crate::ir::semantics`]), storing values in a
+//! per-thread scratch vector (no allocation per call once warm). It
+//! implements all the evaluations of [`Evaluator`]: point values,
+//! forward-mode gradients (dual numbers), intervals, and interval gradients
+//! (interval dual numbers).
+
+use crate::eval::{Evaluator, Grad, IntervalGrad};
+use crate::interval::Interval;
+use crate::ir::semantics::*;
+use crate::ir::validate::{InvalidIr, debug_validate, validate};
+use crate::ir::{Function, Op};
+use std::cell::RefCell;
+
+/// The reference evaluator: walks the op list once per evaluation.
+#[derive(Clone, Debug)]
+pub struct Interpreter {
+    f: Function,
+}
+
+// Per-thread value slots, reused across calls so an evaluation allocates
+// nothing once the vectors have grown to the largest function seen.
+#[derive(Default)]
+struct Scratch {
+    point: Vec<f64>,
+    grad: Vec<Grad>,
+    interval: Vec<Interval>,
+    igrad: Vec<IntervalGrad>,
+}
+
+thread_local! {
+    static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
+}
+
+impl Interpreter {
+    /// An interpreter for `f`, which must be valid IR (checked in debug
+    /// builds; see [`Interpreter::try_new`] for untrusted input).
+    pub fn new(f: Function) -> Interpreter {
+        debug_validate(&f, "Interpreter::new");
+        Interpreter { f }
+    }
+
+    /// An interpreter for `f`, or why `f` is not valid IR.
+    pub fn try_new(f: Function) -> Result<Interpreter, InvalidIr> {
+        validate(&f)?;
+        Ok(Interpreter { f })
+    }
+
+    /// The function it evaluates.
+    pub fn function(&self) -> &Function {
+        &self.f
+    }
+
+    /// Every value of the function at `p`, in op order (for tests and
+    /// debugging: which op first went NaN, and so on).
+    pub fn point_values(&self, p: [f64; 3]) -> Vec<f64> {
+        let mut vals = Vec::with_capacity(self.f.ops.len());
+        run_point(&self.f.ops, p, &mut vals);
+        vals
+    }
+
+    /// Every interval of the function over `b`, in op order.
+    pub fn interval_values(&self, b: [Interval; 3]) -> Vec<Interval> {
+        let mut vals = Vec::with_capacity(self.f.ops.len());
+        run_interval(&self.f.ops, b, &mut vals);
+        vals
+    }
+}
+
+fn run_grad(ops: &[Op], p: [f64; 3], vals: &mut Vec<Grad>) {
+    vals.clear();
+    for op in ops {
+        let v = match *op {
+            Op::Var(var) => {
+                let mut d = [0.0; 3];
+                d[var.index()] = 1.0;
+                Grad {
+                    v: p[var.index()],
+                    d,
+                }
+            }
+            Op::Const(c) => Grad { v: c, d: [0.0; 3] },
+            Op::Unary(u, a) => grad_unary(u, vals[a.index()]),
+            Op::Binary(o, a, b) => grad_binary(o, vals[a.index()], vals[b.index()]),
+            Op::Powi(a, n) => grad_powi(vals[a.index()], n),
+        };
+        vals.push(v);
+    }
+}
+
+/// Forward mode over a box; the partials of coordinate k start as
+/// `seed[k]` (unit vectors for the gradient, `[v_k, 0, 0]` for the
+/// derivative along v).
+fn run_igrad(ops: &[Op], b: [Interval; 3], seed: [[Interval; 3]; 3], vals: &mut Vec<IntervalGrad>) {
+    vals.clear();
+    for op in ops {
+        let v = match *op {
+            Op::Var(var) => IntervalGrad {
+                v: b[var.index()],
+                d: seed[var.index()],
+            },
+            Op::Const(c) => IntervalGrad {
+                v: Interval::point(c),
+                d: [Interval::point(0.0); 3],
+            },
+            Op::Unary(u, a) => igrad_unary(u, vals[a.index()]),
+            Op::Binary(o, x, y) => igrad_binary(o, vals[x.index()], vals[y.index()]),
+            Op::Powi(a, n) => igrad_powi(vals[a.index()], n),
+        };
+        vals.push(v);
+    }
+}
+
+impl Evaluator for Interpreter {
+    fn function(&self) -> Option<&Function> {
+        Some(&self.f)
+    }
+
+    fn point(&self, p: [f64; 3]) -> f64 {
+        SCRATCH.with_borrow_mut(|s| {
+            run_point(&self.f.ops, p, &mut s.point);
+            s.point[self.f.root.index()]
+        })
+    }
+
+    fn point_grad(&self, p: [f64; 3]) -> Grad {
+        SCRATCH.with_borrow_mut(|s| {
+            run_grad(&self.f.ops, p, &mut s.grad);
+            s.grad[self.f.root.index()]
+        })
+    }
+
+    fn interval(&self, b: [Interval; 3]) -> Interval {
+        SCRATCH.with_borrow_mut(|s| {
+            run_interval(&self.f.ops, b, &mut s.interval);
+            s.interval[self.f.root.index()]
+        })
+    }
+
+    fn interval_grad(&self, b: [Interval; 3]) -> IntervalGrad {
+        let (o, z) = (Interval::point(1.0), Interval::point(0.0));
+        let unit = [[o, z, z], [z, o, z], [z, z, o]];
+        SCRATCH.with_borrow_mut(|s| {
+            run_igrad(&self.f.ops, b, unit, &mut s.igrad);
+            s.igrad[self.f.root.index()]
+        })
+    }
+
+    fn interval_dir(&self, b: [Interval; 3], v: [Interval; 3]) -> [Interval; 2] {
+        let z = Interval::point(0.0);
+        let seed = v.map(|vk| [vk, z, z]);
+        SCRATCH.with_borrow_mut(|s| {
+            run_igrad(&self.f.ops, b, seed, &mut s.igrad);
+            let r = s.igrad[self.f.root.index()];
+            [r.v, r.d[0]]
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ir::{BinaryOp, Builder, UnaryOp, Var};
+
+    #[test]
+    fn evaluates_sphere_and_gradient() {
+        let mut b = Builder::new();
+        let x = b.var(Var::X);
+        let y = b.var(Var::Y);
+        let xx = b.unary(UnaryOp::Square, x);
+        let yy = b.powi(y, 2);
+        let s = b.binary(BinaryOp::Add, xx, yy);
+        let one = b.constant(1.0);
+        let r = b.binary(BinaryOp::Sub, s, one);
+        let it = Interpreter::new(b.finish(r));
+        assert_eq!(it.point([3.0, 4.0, 0.0]), 24.0);
+        assert_eq!(it.point_grad([3.0, 4.0, 9.0]).d, [6.0, 8.0, 0.0]);
+        let i = it.interval([
+            Interval::new(-1.0, 2.0),
+            Interval::point(0.0),
+            Interval::ENTIRE,
+        ]);
+        assert!(i.contains(-1.0) && i.contains(3.0) && i.hi < 3.001 && i.lo > -1.001);
+    }
+
+    #[test]
+    fn zero_partials_survive_infinite_derivatives() {
+        // sqrt(x) + y at x = 0: d/dy is exactly 1, not NaN.
+        let mut b = Builder::new();
+        let x = b.var(Var::X);
+        let y = b.var(Var::Y);
+        let s = b.unary(UnaryOp::Sqrt, x);
+        let r = b.binary(BinaryOp::Add, s, y);
+        let g = Interpreter::new(b.finish(r)).point_grad([0.0, 1.0, 0.0]);
+        assert_eq!(g.d, [f64::INFINITY, 1.0, 0.0]);
+    }
+}
