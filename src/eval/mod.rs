@@ -38,7 +38,7 @@ pub trait Evaluator: Send + Sync {
     /// about half as much and is often tighter.
     fn interval_dir(&self, b: [Interval; 3], v: [Interval; 3]) -> [Interval; 2] {
         let g = self.interval_grad(b);
-        let d = (0..3).fold(Interval::point(0.0), |acc, i| acc.add(g.d[i].mul(v[i])));
+        let d = crate::interval::boxes::dot(&g.d, &v);
         [g.v, d]
     }
 

@@ -13,8 +13,8 @@ use std::sync::Arc;
 use crate::eval::interp::Interpreter;
 use crate::eval::{Evaluator, Grad, IntervalGrad};
 use crate::interval::Interval;
+use crate::interval::boxes::{IBox, box_within, point_box};
 use crate::ir::Function;
-use crate::render::camera::{IBox, box_within, point_box};
 
 /// `pruned` on `region`, `whole` elsewhere.
 pub struct Regional {

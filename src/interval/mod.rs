@@ -421,5 +421,6 @@ impl Interval {
     }
 }
 
+pub mod boxes;
 mod transcendental;
 pub use transcendental::{widen_down, widen_up};

@@ -47,11 +47,12 @@
 use std::fmt;
 
 use super::Tracer;
-use super::camera::{CornerRays, IBox, bounds_box, box_hull, normalize, scale};
+use super::camera::{CornerRays, bounds_box, normalize, scale};
 #[cfg(test)]
 use super::shade;
 use super::shade::{AMBIENT, SHININESS, SPECULAR};
 use crate::interval::Interval;
+use crate::interval::boxes::{IBox, box_hull, dot, normalize_box};
 use crate::render::stats::RenderStats;
 use crate::scene::LightKind;
 
@@ -357,7 +358,7 @@ impl Ctx<'_, '_> {
         // F over the part of the beam piece inside the bounds; None when
         // the piece lies wholly outside them.
         let eval_min = |t: Interval, st: &mut RenderStats| -> Option<Interval> {
-            let hb = super::camera::box_meet(corners.hull(t), bounds)?;
+            let hb = crate::interval::boxes::box_meet(corners.hull(t), bounds)?;
             let mut f = Interval::point(f64::INFINITY);
             for k in 0..n {
                 let v = tr.interval_tight(k, hb, 0, st);
@@ -480,13 +481,13 @@ impl Ctx<'_, '_> {
         if !g.d.iter().all(|d| d.lo.is_finite() && d.hi.is_finite()) {
             return None;
         }
-        let dfdt = dot_iv(&g.d, &dirs);
+        let dfdt = dot(&g.d, &dirs);
         if dfdt.is_empty() || dfdt.hi >= 0.0 {
             return None;
         }
-        let nout = normalize_iv(&g.d)?;
-        let v = normalize_iv(&dirs.map(|d| d.neg()))?;
-        let facing = dot_iv(&nout, &v);
+        let nout = normalize_box(&g.d)?;
+        let v = normalize_box(&dirs.map(|d| d.neg()))?;
+        let facing = dot(&nout, &v);
         let n = if facing.lo > 0.0 {
             nout
         } else if facing.hi < 0.0 {
@@ -517,18 +518,18 @@ fn colour_interval(
         let l: IBox = match light.kind {
             LightKind::Directional(dir) => normalize(scale(dir, -1.0))?.map(Interval::point),
             LightKind::Point(lp) => {
-                normalize_iv(&std::array::from_fn(|i| Interval::point(lp[i]).sub(p[i])))?
+                normalize_box(&std::array::from_fn(|i| Interval::point(lp[i]).sub(p[i])))?
             }
         };
-        let ndl = dot_iv(n, &l);
+        let ndl = dot(n, &l);
         if ndl.is_empty() {
             return None;
         }
         if ndl.hi <= 0.0 {
             continue;
         }
-        let h = normalize_iv(&std::array::from_fn(|i| l[i].add(v[i])))?;
-        let ndh = dot_iv(n, &h);
+        let h = normalize_box(&std::array::from_fn(|i| l[i].add(v[i])))?;
+        let ndh = dot(n, &h);
         let ndh = Interval::new(ndh.lo.max(0.0), ndh.hi.max(0.0));
         let spec = Interval::point(SPECULAR).mul(ndh.powi(SHININESS));
         let lam = Interval::new(ndl.lo.max(0.0), ndl.hi);
@@ -545,41 +546,6 @@ fn colour_interval(
     c.iter()
         .all(|i| !i.is_empty() && i.lo.is_finite() && i.hi.is_finite())
         .then_some(c)
-}
-
-fn dot_iv(a: &IBox, b: &IBox) -> Interval {
-    (0..3).fold(Interval::point(0.0), |acc, i| acc.add(a[i].mul(b[i])))
-}
-
-/// Encloses `g / |g|` for every g in the box, component by component:
-/// `g_i / sqrt(g_i² + r)` (r the other components' squared length) is
-/// increasing in g_i and, for fixed sign of g_i, monotone in r, so each
-/// bound sits at an end of g_i and an end of r. None when the box may hold
-/// the zero vector.
-fn normalize_iv(g: &IBox) -> Option<IBox> {
-    if g.iter().all(|c| c.contains(0.0)) || g.iter().any(|c| c.is_empty()) {
-        return None;
-    }
-    let mut out = [Interval::point(0.0); 3];
-    for i in 0..3 {
-        let r = (0..3)
-            .filter(|&j| j != i)
-            .fold(Interval::point(0.0), |acc, j| acc.add(g[j].square()));
-        let at = |a: f64, r: f64| -> Interval {
-            if a == 0.0 {
-                return Interval::point(0.0);
-            }
-            let ai = Interval::point(a);
-            ai.div(ai.square().add(Interval::point(r)).sqrt())
-        };
-        let lo = at(g[i].lo, if g[i].lo >= 0.0 { r.hi } else { r.lo }).lo;
-        let hi = at(g[i].hi, if g[i].hi >= 0.0 { r.lo } else { r.hi }).hi;
-        if lo.partial_cmp(&hi).is_none_or(|o| o.is_gt()) {
-            return None;
-        }
-        out[i] = Interval::new(lo.max(-1.0), hi.min(1.0));
-    }
-    Some(out)
 }
 
 // A ray parameter beyond which every ray of the cell is outside the
@@ -659,7 +625,7 @@ mod tests {
                 Interval::new(0.8, 0.83),
             ];
             let pb: IBox = [Interval::new(0.1, 0.2); 3];
-            let (Some(nb), Some(vn)) = (normalize_iv(&gb), normalize_iv(&vb)) else {
+            let (Some(nb), Some(vn)) = (normalize_box(&gb), normalize_box(&vb)) else {
                 continue;
             };
             let Some(ci) = colour_interval(&tr, color, &nb, &vn, &pb) else {
@@ -710,7 +676,7 @@ mod tests {
             Interval::new(-1.0, 0.25),
             Interval::new(3.0, 3.5),
         ];
-        let n = normalize_iv(&g).unwrap();
+        let n = normalize_box(&g).unwrap();
         for a in [0.5, 1.0, 2.0] {
             for b in [-1.0, 0.0, 0.25] {
                 for c in [3.0f64, 3.5] {
@@ -722,6 +688,6 @@ mod tests {
             }
         }
         let z = [Interval::new(-1.0, 1.0); 3];
-        assert!(normalize_iv(&z).is_none());
+        assert!(normalize_box(&z).is_none());
     }
 }

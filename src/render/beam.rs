@@ -23,10 +23,11 @@
 //! (`Tracer::interval_tight`), which pays off on the small hulls near a
 //! surface, where the natural extension overestimates most.
 
-use super::camera::{CornerRays, IBox, PixelRay, box_hull, ray_box};
+use super::camera::{CornerRays, PixelRay};
 use super::ray::{refine, scene_point, trace_ray};
 use super::{Class, Hit, Tracer};
 use crate::interval::Interval;
+use crate::interval::boxes::{IBox, box_hull, dot, ray_box};
 use crate::render::stats::RenderStats;
 
 // Rejection pieces per sweep before the block is declared undecided.
@@ -302,10 +303,7 @@ fn decreasing(
             return true;
         }
         let g = tr.interval_grad(k as usize, hb, st);
-        let dfdt =
-            g.d.iter()
-                .zip(&dirs)
-                .fold(Interval::point(0.0), |acc, (gi, di)| acc.add(gi.mul(*di)));
+        let dfdt = dot(&g.d, &dirs);
         dfdt.hi < 0.0
     })
 }

@@ -12,10 +12,9 @@
 //! same real line.
 
 use crate::interval::Interval;
+pub use crate::interval::boxes::IBox;
+use crate::interval::boxes::{box_hull, ray_box};
 use crate::scene::{Bounds, Camera, Projection};
-
-/// An interval box in space.
-pub type IBox = [Interval; 3];
 
 /// Why a camera cannot produce rays.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -102,43 +101,9 @@ pub(crate) fn normalize(a: [f64; 3]) -> Option<[f64; 3]> {
     (n.is_finite() && n > 0.0).then(|| scale(a, 1.0 / n))
 }
 
-/// The point interval of each coordinate.
-pub fn point_box(p: [f64; 3]) -> IBox {
-    p.map(Interval::point)
-}
-
-/// The smallest box holding both boxes.
-pub fn box_hull(a: IBox, b: IBox) -> IBox {
-    std::array::from_fn(|i| Interval::new(a[i].lo.min(b[i].lo), a[i].hi.max(b[i].hi)))
-}
-
-/// Whether `inner` lies in `outer` (false where a bound is NaN).
-pub fn box_within(inner: &IBox, outer: &IBox) -> bool {
-    (0..3).all(|i| outer[i].lo <= inner[i].lo && inner[i].hi <= outer[i].hi)
-}
-
-/// `a ∩ b`, or `None` when they do not meet.
-pub fn box_meet(a: IBox, b: IBox) -> Option<IBox> {
-    let mut out = a;
-    for i in 0..3 {
-        let lo = a[i].lo.max(b[i].lo);
-        let hi = a[i].hi.min(b[i].hi);
-        if lo.is_nan() || hi.is_nan() || lo > hi {
-            return None;
-        }
-        out[i] = Interval::new(lo, hi);
-    }
-    Some(out)
-}
-
 /// The scene bounds as a box.
 pub fn bounds_box(b: &Bounds) -> IBox {
     std::array::from_fn(|i| Interval::new(b.min[i], b.max[i]))
-}
-
-/// `o + t·d` for interval operands.
-pub fn ray_box(o: IBox, d: IBox, t: Interval) -> IBox {
-    std::array::from_fn(|i| o[i].add(t.mul(d[i])))
 }
 
 impl RayCamera {

@@ -38,9 +38,10 @@ use rayon::prelude::*;
 
 use crate::eval::{Evaluator, Grad, IntervalGrad};
 use crate::interval::Interval;
+use crate::interval::boxes::IBox;
 use crate::scene::{Bounds, Light, Scene};
 pub use aa::Aa;
-use camera::{CameraError, IBox, PixelRay, RayCamera};
+use camera::{CameraError, PixelRay, RayCamera};
 pub use stats::RenderStats;
 
 /// Side of the square tiles traced in parallel.
@@ -279,7 +280,7 @@ pub(crate) fn prune_evals(
             // the old one; else start again from the whole function.
             let whole = e.whole().cloned().unwrap_or_else(|| Arc::clone(e));
             let (source, before) = match e.valid_region() {
-                Some(r) if !camera::box_within(&region, &r) => {
+                Some(r) if !crate::interval::boxes::box_within(&region, &r) => {
                     let f = whole.function()?;
                     (f, f.live_count())
                 }
@@ -411,7 +412,7 @@ impl<'a> Tracer<'a> {
         if !g.d.iter().all(|d| d.lo.is_finite() && d.hi.is_finite()) {
             return f;
         }
-        let fc = self.interval(k, camera::point_box(c), st);
+        let fc = self.interval(k, crate::interval::boxes::point_box(c), st);
         if fc.is_empty() || !fc.lo.is_finite() || !fc.hi.is_finite() {
             return f;
         }

@@ -25,9 +25,10 @@
 //! start point has f < 0 (point evaluation) hits at t0: cut-away views of
 //! solids clipped by the bounds, and filled masks for 2D functions.
 
-use super::camera::{IBox, PixelRay, ray_box};
+use super::camera::PixelRay;
 use super::{Hit, Tracer};
 use crate::interval::Interval;
+use crate::interval::boxes::{IBox, ray_box};
 use crate::render::stats::RenderStats;
 
 // Caps that keep a pathological function from stalling a render; reaching
@@ -398,7 +399,8 @@ pub(crate) fn march(
 mod tests {
     use super::*;
     use crate::eval::{Evaluator, Grad, IntervalGrad};
-    use crate::render::camera::{RayCamera, point_box};
+    use crate::interval::boxes::point_box;
+    use crate::render::camera::RayCamera;
     use crate::scene::{Bounds, Camera};
     use std::sync::Arc;
 

@@ -24,10 +24,9 @@
 //! segment. Lights with `shadows: false` run no shadow code.
 
 use super::Tracer;
-use super::camera::{
-    IBox, add, bounds_box, box_hull, box_meet, dot, normalize, point_box, scale, sub,
-};
+use super::camera::{add, bounds_box, dot, normalize, scale, sub};
 use crate::interval::Interval;
+use crate::interval::boxes::{IBox, box_hull, box_meet, point_box};
 use crate::render::stats::RenderStats;
 use crate::scene::LightKind;
 

@@ -1,0 +1,79 @@
+//! Boxes in space as three intervals, and the vector maths over them that
+//! the tracer needs (one copy of each, all outward-rounded through
+//! [`Interval`]).
+
+use super::Interval;
+
+/// An interval box in space.
+pub type IBox = [Interval; 3];
+
+/// The point interval of each coordinate.
+pub fn point_box(p: [f64; 3]) -> IBox {
+    p.map(Interval::point)
+}
+
+/// The smallest box holding both boxes.
+pub fn box_hull(a: IBox, b: IBox) -> IBox {
+    std::array::from_fn(|i| Interval::new(a[i].lo.min(b[i].lo), a[i].hi.max(b[i].hi)))
+}
+
+/// Whether `inner` lies in `outer` (false where a bound is NaN).
+pub fn box_within(inner: &IBox, outer: &IBox) -> bool {
+    (0..3).all(|i| outer[i].lo <= inner[i].lo && inner[i].hi <= outer[i].hi)
+}
+
+/// `a ∩ b`, or `None` when they do not meet.
+pub fn box_meet(a: IBox, b: IBox) -> Option<IBox> {
+    let mut out = a;
+    for i in 0..3 {
+        let lo = a[i].lo.max(b[i].lo);
+        let hi = a[i].hi.min(b[i].hi);
+        if lo.is_nan() || hi.is_nan() || lo > hi {
+            return None;
+        }
+        out[i] = Interval::new(lo, hi);
+    }
+    Some(out)
+}
+
+/// `o + t·d` for interval operands.
+pub fn ray_box(o: IBox, d: IBox, t: Interval) -> IBox {
+    std::array::from_fn(|i| o[i].add(t.mul(d[i])))
+}
+
+/// An interval containing `a · b` for every pair of vectors in the boxes
+/// (summed in axis order, so every caller gets the same bits).
+pub fn dot(a: &IBox, b: &IBox) -> Interval {
+    (0..3).fold(Interval::point(0.0), |acc, i| acc.add(a[i].mul(b[i])))
+}
+
+/// Encloses `g / |g|` for every g in the box, component by component:
+/// `g_i / sqrt(g_i² + r)` (r the other components' squared length) is
+/// increasing in g_i and, for fixed sign of g_i, monotone in r, so each
+/// bound sits at an end of g_i and an end of r. None when the box may hold
+/// the zero vector.
+pub fn normalize_box(g: &IBox) -> Option<IBox> {
+    if g.iter().all(|c| c.contains(0.0)) || g.iter().any(|c| c.is_empty()) {
+        return None;
+    }
+    let mut out = [Interval::point(0.0); 3];
+    for i in 0..3 {
+        let r = (0..3)
+            .filter(|&j| j != i)
+            .fold(Interval::point(0.0), |acc, j| acc.add(g[j].square()));
+        let at = |a: f64, r: f64| -> Interval {
+            if a == 0.0 {
+                return Interval::point(0.0);
+            }
+            let ai = Interval::point(a);
+            ai.div(ai.square().add(Interval::point(r)).sqrt())
+        };
+        let lo = at(g[i].lo, if g[i].lo >= 0.0 { r.hi } else { r.lo }).lo;
+        let hi = at(g[i].hi, if g[i].hi >= 0.0 { r.lo } else { r.hi }).hi;
+        if lo.partial_cmp(&hi).is_none_or(|o| o.is_gt()) {
+            return None;
+        }
+        out[i] = Interval::new(lo.max(-1.0), hi.min(1.0));
+    }
+    Some(out)
+}
