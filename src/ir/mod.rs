@@ -25,7 +25,7 @@ pub mod random;
 pub mod semantics;
 pub mod validate;
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap;
 use std::fmt;
 
 /// Index of an SSA value (and of the op that defines it) in a [`Function`].
@@ -298,7 +298,7 @@ impl Function {
 #[derive(Default, Debug, Clone)]
 pub struct Builder {
     ops: Vec<Op>,
-    index: HashMap<Op, ValueId>,
+    index: FxHashMap<Op, ValueId>,
 }
 
 impl Builder {

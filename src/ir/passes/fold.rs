@@ -18,7 +18,7 @@ pub(super) fn constant(b: &Builder, v: ValueId) -> Option<f64> {
 }
 
 // a + b if the sum is exact (two_sum error 0, no overflow).
-fn exact_add(a: f64, b: f64) -> Option<f64> {
+pub(super) fn exact_add(a: f64, b: f64) -> Option<f64> {
     let s = a + b;
     if !s.is_finite() || !a.is_finite() || !b.is_finite() {
         return None;
@@ -35,7 +35,7 @@ fn safe_magnitude(v: f64) -> bool {
     v == 0.0 || (1e-290..=1e290).contains(&v.abs())
 }
 
-fn exact_mul(a: f64, b: f64) -> Option<f64> {
+pub(super) fn exact_mul(a: f64, b: f64) -> Option<f64> {
     let p = a * b;
     if !(safe_magnitude(a) && safe_magnitude(b) && safe_magnitude(p)) {
         return None;

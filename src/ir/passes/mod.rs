@@ -16,15 +16,20 @@
 //! becoming one `powi`) change the point value by a few ulps at most.
 //!
 //! One file per pass: [`fold`] (constant folding), [`identities`],
-//! [`specialise`]; CSE and DCE are short enough to live here.
+//! [`terms`] (collecting like terms), [`specialise`], [`balance`] (long
+//! chains into balanced trees); CSE and DCE are short enough to live here.
 
+mod balance;
 mod fold;
 mod identities;
 mod specialise;
+mod terms;
 
+pub use balance::balance_chains;
 pub use fold::fold_constants;
 pub use identities::identities;
 pub use specialise::specialise;
+pub use terms::collect_terms;
 
 use super::validate::debug_validate;
 use super::{Builder, Function, Op, ValueId};
@@ -49,12 +54,20 @@ pub const PASSES: &[Pass] = &[
         run: identities,
     },
     Pass {
+        name: "terms",
+        run: collect_terms,
+    },
+    Pass {
         name: "specialise",
         run: specialise,
     },
     Pass {
         name: "cse",
         run: cse,
+    },
+    Pass {
+        name: "balance",
+        run: balance_chains,
     },
     Pass {
         name: "dce",
