@@ -34,6 +34,68 @@ pub struct Pruned {
     pub decided: usize,
 }
 
+/// What pruning knows of one value over a box.
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
+pub struct Facts {
+    /// The value is a finite number at every point of the box.
+    pub defined: bool,
+    /// The value is never negative, by its form (a square, a sum of
+    /// squares...). Floating-point point values keep that sign exactly,
+    /// while the interval of such a sum may dip below 0 by rounding, which
+    /// alone would leave `sqrt(x² + y²)` unproven.
+    pub nonneg: bool,
+}
+
+/// The facts of `op`'s value over a box, from its own interval `value`
+/// and its operands' intervals and facts (`arg`). The one statement of
+/// the rules, shared by [`prune`] and the tapes' pruning.
+pub fn facts(op: &Op, value: Interval, arg: impl Fn(ValueId) -> (Interval, Facts)) -> Facts {
+    let finite = |i: Interval| i.lo.is_finite() && i.hi.is_finite();
+    let args_defined = op.operands().all(|a| arg(a).1.defined);
+    let nonneg = match *op {
+        Op::Const(c) => c >= 0.0,
+        Op::Unary(UnaryOp::Square | UnaryOp::Abs | UnaryOp::Sqrt | UnaryOp::Exp, _) => true,
+        Op::Powi(_, n) => n % 2 == 0,
+        Op::Binary(
+            BinaryOp::Add | BinaryOp::Mul | BinaryOp::Div | BinaryOp::Min | BinaryOp::Max,
+            x,
+            y,
+        ) => arg(x).1.nonneg && arg(y).1.nonneg,
+        _ => false,
+    };
+    let domain = match *op {
+        Op::Unary(UnaryOp::Sqrt, a) => arg(a).0.lo >= 0.0 || arg(a).1.nonneg,
+        Op::Unary(UnaryOp::Ln, a) => arg(a).0.lo > 0.0,
+        Op::Binary(BinaryOp::Div, _, d) => arg(d).0.lo > 0.0 || arg(d).0.hi < 0.0,
+        Op::Binary(BinaryOp::Pow, base, _) => arg(base).0.lo > 0.0,
+        Op::Powi(a, n) if n < 0 => arg(a).0.lo > 0.0 || arg(a).0.hi < 0.0,
+        _ => true,
+    };
+    Facts {
+        defined: args_defined && domain && finite(value),
+        nonneg,
+    }
+}
+
+/// The operand (0 or 1) that `op` (`min` or `max`) picks at every point of
+/// a box where its operands have these intervals and facts, if one is
+/// proven to (the other must be proven defined: a NaN would win).
+pub fn decided_operand(op: BinaryOp, x: (Interval, Facts), y: (Interval, Facts)) -> Option<usize> {
+    let (a, c) = (x.0, y.0);
+    let (x_wins, y_wins) = match op {
+        BinaryOp::Min => (a.hi < c.lo, c.hi < a.lo),
+        BinaryOp::Max => (a.lo > c.hi, c.lo > a.hi),
+        _ => return None,
+    };
+    if x_wins && y.1.defined {
+        Some(0)
+    } else if y_wins && x.1.defined {
+        Some(1)
+    } else {
+        None
+    }
+}
+
 /// `f` restricted to the box `b` (see the module docs); `None` when no
 /// `min`/`max` node is decided there.
 pub fn prune(f: &Function, b: [Interval; 3]) -> Option<Pruned> {
@@ -46,53 +108,20 @@ pub fn prune(f: &Function, b: [Interval; 3]) -> Option<Pruned> {
 pub fn prune_to_at_most(f: &Function, b: [Interval; 3], max_live: usize) -> Option<Pruned> {
     let mut iv = Vec::with_capacity(f.ops.len());
     run_interval(&f.ops, b, &mut iv);
-    let finite = |i: Interval| i.lo.is_finite() && i.hi.is_finite();
-    // defined[i]: op i gives a finite number at every point of the box.
-    let mut defined = vec![false; f.ops.len()];
-    // nonneg[i]: op i is never negative, by its form (a square, a sum of
-    // squares...). Floating-point point values keep that sign exactly,
-    // while the interval of such a sum may dip below 0 by rounding, which
-    // alone would leave `sqrt(x² + y²)` unproven.
-    let mut nonneg = vec![false; f.ops.len()];
+    let mut fact = vec![Facts::default(); f.ops.len()];
     // alias[i]: the op whose value op i always equals on the box.
     let mut alias: Vec<usize> = (0..f.ops.len()).collect();
     let mut decided = 0;
     for (i, op) in f.ops.iter().enumerate() {
-        let args_defined = op.operands().all(|a| defined[a.index()]);
-        nonneg[i] = match *op {
-            Op::Const(c) => c >= 0.0,
-            Op::Unary(UnaryOp::Square | UnaryOp::Abs | UnaryOp::Sqrt | UnaryOp::Exp, _) => true,
-            Op::Powi(_, n) => n % 2 == 0,
-            Op::Binary(
-                BinaryOp::Add | BinaryOp::Mul | BinaryOp::Div | BinaryOp::Min | BinaryOp::Max,
-                x,
-                y,
-            ) => nonneg[x.index()] && nonneg[y.index()],
-            _ => false,
+        let arg = |v: ValueId| (iv[v.index()], fact[v.index()]);
+        let choice = match *op {
+            Op::Binary(o, x, y) => decided_operand(o, arg(x), arg(y)).map(|k| [x, y][k]),
+            _ => None,
         };
-        let domain = match *op {
-            Op::Unary(UnaryOp::Sqrt, a) => iv[a.index()].lo >= 0.0 || nonneg[a.index()],
-            Op::Unary(UnaryOp::Ln, a) => iv[a.index()].lo > 0.0,
-            Op::Binary(BinaryOp::Div, _, d) => iv[d.index()].lo > 0.0 || iv[d.index()].hi < 0.0,
-            Op::Binary(BinaryOp::Pow, base, _) => iv[base.index()].lo > 0.0,
-            Op::Powi(a, n) if n < 0 => iv[a.index()].lo > 0.0 || iv[a.index()].hi < 0.0,
-            _ => true,
-        };
-        defined[i] = args_defined && domain && finite(iv[i]);
-        if let Op::Binary(op @ (BinaryOp::Min | BinaryOp::Max), x, y) = *op {
-            let (a, c) = (iv[x.index()], iv[y.index()]);
-            let (x_wins, y_wins) = if op == BinaryOp::Min {
-                (a.hi < c.lo, c.hi < a.lo)
-            } else {
-                (a.lo > c.hi, c.lo > a.hi)
-            };
-            if x_wins && defined[y.index()] {
-                alias[i] = alias[x.index()];
-                decided += 1;
-            } else if y_wins && defined[x.index()] {
-                alias[i] = alias[y.index()];
-                decided += 1;
-            }
+        fact[i] = facts(op, iv[i], arg);
+        if let Some(winner) = choice {
+            alias[i] = alias[winner.index()];
+            decided += 1;
         }
     }
     if decided == 0 {
