@@ -542,9 +542,15 @@ mod tests {
         assert_eq!(Aa::parse("none"), Ok(Aa::None));
         assert_eq!(Aa::parse("grid:4"), Ok(Aa::Grid(4)));
         assert!(matches!(Aa::parse("iaa"), Ok(Aa::Iaa { depth: 2, .. })));
-        assert!(Aa::parse("grid:0").is_err());
-        assert!(Aa::parse("grid:x").is_err());
-        assert!(Aa::parse("ssaa").is_err());
+        assert_eq!(Aa::parse("grid:0"), Err(AaError::GridOutOfRange(0)));
+        assert!(matches!(
+            Aa::parse("grid:x"),
+            Err(AaError::NotANumber { .. })
+        ));
+        assert_eq!(
+            Aa::parse("ssaa").map_err(|e| e.to_string()),
+            Err("anti-aliasing `ssaa` is not none, iaa or grid:N".to_string())
+        );
     }
 
     #[test]

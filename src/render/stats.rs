@@ -245,4 +245,21 @@ mod tests {
         assert_eq!(json["rays"], 3);
         assert_eq!(json["output_ms"], 0.0);
     }
+
+    #[test]
+    fn the_text_form_shows_every_field() {
+        let text = RenderStats::default().to_string();
+        let json = RenderStats::default().to_json();
+        for key in json.as_object().unwrap().keys() {
+            let name = if key == "aa_samples_mean" {
+                "aa_samples"
+            } else {
+                key
+            };
+            assert!(
+                text.contains(&format!(" {name} ")),
+                "{name} missing from {text}"
+            );
+        }
+    }
 }
