@@ -1,7 +1,7 @@
 //! Render counters: gathered per tile, merged in tile order at the end, so
 //! every count is the same for any thread count (times are not).
 //!
-//! The counters are declared once, in the [`counters!`] list below: it
+//! The counters are declared once, in the `counters!` list below: it
 //! makes the struct, its merge and its text form, and serde makes its JSON,
 //! so a new counter is one line of that list.
 
