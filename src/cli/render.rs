@@ -105,7 +105,7 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
 
 /// Parses an `--aa` value.
 pub fn parse_aa(s: &str) -> Result<Aa, String> {
-    Aa::parse(s)
+    Aa::parse(s).map_err(|e| e.to_string())
 }
 
 fn parse_threshold(s: &str) -> Result<f64, String> {

@@ -5,7 +5,8 @@
 //! After the base render (one ray through each pixel centre), each tile is
 //! revisited as beams over the *whole area* of its pixels, starting with
 //! the tile and quartering down to single pixels. A block's beam gets the
-//! front-to-back rejection sweep of [`super::beam`] over its hull clipped
+//! front-to-back rejection sweep of the tracer's blocks (`probe`, shared
+//! with [`super::beam`]) over its hull clipped
 //! to the bounds and, where a surface remains, the inclusion test; the
 //! outcome is one of:
 //! - *background*: every ray of the block misses: no extra sample, the
@@ -46,15 +47,13 @@
 
 use std::fmt;
 
-use super::Tracer;
-use super::camera::{CornerRays, bounds_box, normalize, scale};
-#[cfg(test)]
-use super::shade;
-use super::shade::{AMBIENT, SHININESS, SPECULAR};
+use super::camera::{CornerRays, bounds_box};
+use super::probe::{self, Form, Rect, Sweep};
+use super::shade::colour_interval;
+use super::stats::RenderStats;
+use super::tracer::{TileState, Tracer};
 use crate::interval::Interval;
-use crate::interval::boxes::{IBox, box_hull, dot, normalize_box};
-use crate::render::stats::RenderStats;
-use crate::scene::LightKind;
+use crate::interval::boxes::{IBox, box_meet, dot, normalize_box};
 
 /// Default IAA threshold: 1/64 of the linear colour range per channel.
 pub const DEFAULT_THRESHOLD: f64 = 1.0 / 64.0;
@@ -67,6 +66,9 @@ pub const MAX_GRID: u32 = 32;
 
 // Bisections of an included bracket before the colour test.
 const NARROW_STEPS: usize = 6;
+// Relative and absolute margin that keeps `far_t` beyond the bounds
+// despite its rounding.
+const FAR_MARGIN: f64 = 1e-9;
 
 /// An anti-aliasing mode.
 #[derive(Copy, Clone, Debug, PartialEq, Default)]
@@ -85,9 +87,59 @@ pub enum Aa {
     },
 }
 
+/// Why an anti-aliasing mode was refused.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AaError {
+    /// The text names no mode.
+    UnknownMode(String),
+    /// `grid:N` where N is not a whole number.
+    NotANumber {
+        /// The whole mode text.
+        mode: String,
+        /// The part after `grid:`.
+        n: String,
+    },
+    /// `grid:N` with N out of `1..=MAX_GRID`.
+    GridOutOfRange(u32),
+    /// An IAA threshold that is negative or not finite.
+    BadThreshold(f64),
+    /// An IAA depth above [`MAX_DEPTH`].
+    DepthOutOfRange(u32),
+    /// A `grid:N` image too large to trace.
+    TooManySamples {
+        /// The grid factor.
+        grid: u32,
+        /// Image width.
+        width: u32,
+        /// Image height.
+        height: u32,
+    },
+}
+
+impl fmt::Display for AaError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            AaError::UnknownMode(s) => write!(f, "anti-aliasing `{s}` is not none, iaa or grid:N"),
+            AaError::NotANumber { mode, n } => {
+                write!(f, "anti-aliasing `{mode}`: `{n}` is not a whole number")
+            }
+            AaError::GridOutOfRange(n) => write!(f, "grid:{n}: N must be in 1..={MAX_GRID}"),
+            AaError::BadThreshold(t) => write!(f, "IAA threshold {t} must be finite and ≥ 0"),
+            AaError::DepthOutOfRange(d) => write!(f, "IAA depth {d} must be in 0..={MAX_DEPTH}"),
+            AaError::TooManySamples {
+                grid,
+                width,
+                height,
+            } => write!(f, "grid:{grid} on {width}x{height} is too many samples"),
+        }
+    }
+}
+
+impl std::error::Error for AaError {}
+
 impl Aa {
     /// Parses `none`, `iaa` (default threshold and depth) or `grid:N`.
-    pub fn parse(s: &str) -> Result<Aa, String> {
+    pub fn parse(s: &str) -> Result<Aa, AaError> {
         match s.trim() {
             "none" => Ok(Aa::None),
             "iaa" => Ok(Aa::Iaa {
@@ -97,10 +149,11 @@ impl Aa {
             t => {
                 let n = t
                     .strip_prefix("grid:")
-                    .ok_or_else(|| format!("anti-aliasing `{s}` is not none, iaa or grid:N"))?;
-                let n: u32 = n
-                    .parse()
-                    .map_err(|_| format!("anti-aliasing `{s}`: `{n}` is not a whole number"))?;
+                    .ok_or_else(|| AaError::UnknownMode(s.to_string()))?;
+                let n: u32 = n.parse().map_err(|_| AaError::NotANumber {
+                    mode: s.to_string(),
+                    n: n.to_string(),
+                })?;
                 let aa = Aa::Grid(n);
                 aa.validate()?;
                 Ok(aa)
@@ -109,16 +162,16 @@ impl Aa {
     }
 
     /// Checks the parameters' ranges.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), AaError> {
         match *self {
             Aa::None => Ok(()),
             Aa::Grid(n) if (1..=MAX_GRID).contains(&n) => Ok(()),
-            Aa::Grid(n) => Err(format!("grid:{n}: N must be in 1..={MAX_GRID}")),
+            Aa::Grid(n) => Err(AaError::GridOutOfRange(n)),
             Aa::Iaa { threshold, depth } => {
                 if !(threshold >= 0.0 && threshold.is_finite()) {
-                    Err(format!("IAA threshold {threshold} must be finite and ≥ 0"))
+                    Err(AaError::BadThreshold(threshold))
                 } else if depth > MAX_DEPTH {
-                    Err(format!("IAA depth {depth} must be in 0..={MAX_DEPTH}"))
+                    Err(AaError::DepthOutOfRange(depth))
                 } else {
                     Ok(())
                 }
@@ -191,7 +244,7 @@ pub(crate) fn classify_tile(
     px: &mut TilePixels<'_>,
     background: [f64; 3],
     threshold: f64,
-    st: &mut RenderStats,
+    st: &mut TileState,
 ) -> Vec<bool> {
     let n = (px.w * px.h) as usize;
     let mut split = vec![false; n];
@@ -217,11 +270,18 @@ pub(crate) fn classify_tile(
         .collect();
     let ctx = Ctx {
         tr,
+        all: (0..tr.evals.len() as u32).collect(),
         background,
         threshold,
         shadow_edge: &shadow_edge,
     };
-    ctx.block(px, &mut split, (0, 0, px.w, px.h), 0.0, st);
+    let whole = Rect {
+        x0: 0,
+        y0: 0,
+        x1: px.w,
+        y1: px.h,
+    };
+    ctx.block(px, &mut split, whole, 0.0, st);
     split
 }
 
@@ -273,6 +333,8 @@ pub(crate) fn merge_split(
 
 struct Ctx<'t, 'a> {
     tr: &'t Tracer<'a>,
+    /// Every object: a cell's beam tests consider them all.
+    all: Vec<u32>,
     background: [f64; 3],
     threshold: f64,
     /// Pixels on a shadow edge (see `classify_tile`).
@@ -285,59 +347,49 @@ impl Ctx<'_, '_> {
         &self,
         px: &mut TilePixels<'_>,
         split: &mut [bool],
-        (bx0, by0, bx1, by1): (u32, u32, u32, u32),
+        b: Rect,
         t_floor: f64,
-        st: &mut RenderStats,
+        st: &mut TileState,
     ) {
-        let xs = (f64::from(px.x0 + bx0), f64::from(px.x0 + bx1));
-        let ys = (f64::from(px.y0 + by0), f64::from(px.y0 + by1));
+        let xs = (f64::from(px.x0 + b.x0), f64::from(px.x0 + b.x1));
+        let ys = (f64::from(px.y0 + b.y0), f64::from(px.y0 + b.y1));
         let d = self.test(xs, ys, t_floor, st);
+        let w = px.w;
+        let idx = move |(i, j): (u32, u32)| (j * w + i) as usize;
         // A verdict stands only where every base ray agrees with it (a
         // rounding disagreement between a beam and a ray is settled by
         // looking closer).
         let agrees = |px: &TilePixels<'_>, want_hit: bool| {
-            (by0..by1).all(|j| {
-                (bx0..bx1).all(|i| px.depth[(j * px.w + i) as usize].is_finite() == want_hit)
-            })
+            b.pixels().all(|p| px.depth[idx(p)].is_finite() == want_hit)
         };
-        let edge_in = |px: &TilePixels<'_>| {
-            (by0..by1).any(|j| (bx0..bx1).any(|i| self.shadow_edge[(j * px.w + i) as usize]))
-        };
+        let edge_in = || b.pixels().any(|p| self.shadow_edge[idx(p)]);
         match d.cell {
             Cell::Background if agrees(px, false) => {
-                for j in by0..by1 {
-                    for i in bx0..bx1 {
-                        px.linear[(j * px.w + i) as usize] = self.background;
-                    }
+                for p in b.pixels() {
+                    px.linear[idx(p)] = self.background;
                 }
                 return;
             }
-            Cell::Smooth if agrees(px, true) && !edge_in(px) => return,
+            Cell::Smooth if agrees(px, true) && !edge_in() => return,
             _ => {}
         }
-        if bx1 - bx0 == 1 && by1 - by0 == 1 {
-            let k = (by0 * px.w + bx0) as usize;
+        if b.is_pixel() {
+            let k = idx((b.x0, b.y0));
             split[k] = true;
             let edge = d.cell == Cell::Smooth && self.shadow_edge[k];
-            st.aa_split_by_shading += u64::from(d.by_shading || edge);
+            st.stats.aa_split_by_shading += u64::from(d.by_shading || edge);
             return;
         }
-        let mx = (bx0 + bx1).div_ceil(2);
-        let my = (by0 + by1).div_ceil(2);
-        for (y0, y1) in [(by0, my), (my, by1)] {
-            for (x0, x1) in [(bx0, mx), (mx, bx1)] {
-                if x0 < x1 && y0 < y1 {
-                    self.block(px, split, (x0, y0, x1, y1), d.t_floor, st);
-                }
-            }
+        for q in b.quarters_by_row() {
+            self.block(px, split, q, d.t_floor, st);
         }
     }
 
     // The beam tests of the screen rectangle xs × ys (whole area).
-    fn test(&self, xs: (f64, f64), ys: (f64, f64), t_floor: f64, st: &mut RenderStats) -> Decision {
+    fn test(&self, xs: (f64, f64), ys: (f64, f64), t_floor: f64, st: &mut TileState) -> Decision {
         let tr = self.tr;
-        let split = |t_floor| Decision {
-            cell: Cell::Split,
+        let decide = |cell, t_floor| Decision {
+            cell,
             t_floor,
             by_shading: false,
         };
@@ -346,105 +398,58 @@ impl Ctx<'_, '_> {
         let t1 = far_t(&corners, &bounds);
         let t0 = t_floor.max(0.0);
         if t0.partial_cmp(&t1).is_none_or(|o| o.is_gt()) {
-            return Decision {
-                cell: Cell::Background,
-                t_floor,
-                by_shading: false,
-            };
+            return decide(Cell::Background, t_floor);
         }
         let side = (xs.1 - xs.0).max(ys.1 - ys.0);
-        let min_w = |t: f64| side * tr.cam.spacing(t).max(1e-9);
-        let n = tr.evals.len();
+        let min_w = |t: f64| probe::min_width(tr, side, t);
         // F over the part of the beam piece inside the bounds; None when
         // the piece lies wholly outside them.
-        let eval_min = |t: Interval, st: &mut RenderStats| -> Option<Interval> {
-            let hb = crate::interval::boxes::box_meet(corners.hull(t), bounds)?;
-            let mut f = Interval::point(f64::INFINITY);
-            for k in 0..n {
-                let v = tr.interval_tight(k, hb, 0, st);
-                if !v.is_empty() {
-                    f = f.min(v);
-                }
-            }
-            Some(f)
+        let eval_min = |t: Interval, st: &mut TileState| -> Option<Interval> {
+            let hb = box_meet(corners.hull(t), bounds)?;
+            Some(probe::scene_interval(tr, &self.all, hb, Form::Tight(0), st))
         };
-        if tr.flat {
+        let rejected = |t: Interval| eval_min(t, st).is_none_or(|f| f.lo > 0.0);
+        let (ta, tb) = match probe::sweep(tr.flat, t0, t1, min_w, rejected) {
+            Sweep::Empty => return decide(Cell::Background, t_floor),
             // Constant along the rays: no bracket to include.
-            let rejected = eval_min(Interval::new(t0, t1), st).is_none_or(|f| f.lo > 0.0);
-            return Decision {
-                cell: if rejected {
-                    Cell::Background
-                } else {
-                    Cell::Split
-                },
-                t_floor,
-                by_shading: false,
-            };
-        }
-        let found = super::beam::first_candidate(t0, t1, min_w, |t| {
-            eval_min(t, st).is_none_or(|f| f.lo > 0.0)
-        });
-        let Some((ta, tb)) = found else {
-            return Decision {
-                cell: Cell::Background,
-                t_floor,
-                by_shading: false,
-            };
+            Sweep::Flat => return decide(Cell::Split, t_floor),
+            Sweep::Candidate(ta, tb) => (ta, tb),
         };
         // Inclusion: the unclipped cross-sections at ta (positive) and at
         // tb2 (negative), the piece between inside the bounds (so no ray
         // leaves them before its root), one object that may vanish there,
         // strictly decreasing along every ray.
-        let whole = |t: Interval, st: &mut RenderStats| -> Interval {
-            let hb = corners.hull(t);
-            let mut f = Interval::point(f64::INFINITY);
-            for k in 0..n {
-                let v = tr.interval(k, hb, st);
-                if !v.is_empty() {
-                    f = f.min(v);
-                }
-            }
-            f
+        let mut whole = |t: f64| {
+            let hb = corners.hull(Interval::point(t));
+            probe::scene_interval(tr, &self.all, hb, Form::Natural, st)
         };
-        if whole(Interval::point(ta), st).lo <= 0.0 {
-            return split(ta);
-        }
-        let w = (tb - ta).max(min_w(ta));
-        for mult in [1.0, 2.0, 4.0] {
-            let tb2 = (ta + mult * w).min(t1);
-            if whole(Interval::point(tb2), st).hi < 0.0 {
-                // Narrow the bracket while a mid cross-section has one
-                // sign: the normal's enclosure over the piece tightens
-                // with its depth.
-                let (mut a, mut b) = (ta, tb2);
-                for _ in 0..NARROW_STEPS {
-                    let m = 0.5 * (a + b);
-                    let fm = whole(Interval::point(m), st);
-                    if fm.lo > 0.0 {
-                        a = m;
-                    } else if fm.hi < 0.0 {
-                        b = m;
-                    } else {
-                        break;
-                    }
-                }
-                let piece = Interval::new(a, b);
-                let smooth = self.smooth_on(&corners, &bounds, piece, st);
-                return Decision {
-                    cell: if smooth == Some(true) {
-                        Cell::Smooth
-                    } else {
-                        Cell::Split
-                    },
-                    t_floor: ta,
-                    by_shading: smooth == Some(false),
-                };
-            }
-            if tb2 >= t1 {
+        let Some(tb2) = probe::bracket_end((ta, tb), t1, min_w, &mut whole) else {
+            return decide(Cell::Split, ta);
+        };
+        // Narrow the bracket while a mid cross-section has one sign: the
+        // normal's enclosure over the piece tightens with its depth.
+        let (mut a, mut b) = (ta, tb2);
+        for _ in 0..NARROW_STEPS {
+            let m = 0.5 * (a + b);
+            let fm = whole(m);
+            if fm.lo > 0.0 {
+                a = m;
+            } else if fm.hi < 0.0 {
+                b = m;
+            } else {
                 break;
             }
         }
-        split(ta)
+        let smooth = self.smooth_on(&corners, &bounds, Interval::new(a, b), &mut st.stats);
+        Decision {
+            cell: if smooth == Some(true) {
+                Cell::Smooth
+            } else {
+                Cell::Split
+            },
+            t_floor: ta,
+            by_shading: smooth == Some(false),
+        }
     }
 
     // None unless one object alone may vanish on the beam piece and it
@@ -475,8 +480,7 @@ impl Ctx<'_, '_> {
             only = Some(k);
         }
         let k = only?;
-        let c = &corners.0;
-        let dirs = box_hull(box_hull(c[0].1, c[1].1), box_hull(c[2].1, c[3].1));
+        let dirs = corners.directions();
         let g = tr.interval_grad(k, hb, st);
         if !g.d.iter().all(|d| d.lo.is_finite() && d.hi.is_finite()) {
             return None;
@@ -503,51 +507,6 @@ impl Ctx<'_, '_> {
     }
 }
 
-/// Encloses the colour `shade::shade` gives (shadows aside) for every
-/// unit normal in `n`, view vector in `v` and point in `p`.
-fn colour_interval(
-    tr: &Tracer<'_>,
-    color: [f64; 3],
-    n: &IBox,
-    v: &IBox,
-    p: &IBox,
-) -> Option<[Interval; 3]> {
-    let mut c: [Interval; 3] =
-        std::array::from_fn(|i| Interval::point(color[i]).mul(Interval::point(AMBIENT)));
-    for light in tr.lights {
-        let l: IBox = match light.kind {
-            LightKind::Directional(dir) => normalize(scale(dir, -1.0))?.map(Interval::point),
-            LightKind::Point(lp) => {
-                normalize_box(&std::array::from_fn(|i| Interval::point(lp[i]).sub(p[i])))?
-            }
-        };
-        let ndl = dot(n, &l);
-        if ndl.is_empty() {
-            return None;
-        }
-        if ndl.hi <= 0.0 {
-            continue;
-        }
-        let h = normalize_box(&std::array::from_fn(|i| l[i].add(v[i])))?;
-        let ndh = dot(n, &h);
-        let ndh = Interval::new(ndh.lo.max(0.0), ndh.hi.max(0.0));
-        let spec = Interval::point(SPECULAR).mul(ndh.powi(SHININESS));
-        let lam = Interval::new(ndl.lo.max(0.0), ndl.hi);
-        for (ch, out) in c.iter_mut().enumerate() {
-            let mut add =
-                Interval::point(light.color[ch]).mul(Interval::point(color[ch]).mul(lam).add(spec));
-            if ndl.lo <= 0.0 {
-                // The light may be behind the surface for some normals.
-                add = Interval::new(add.lo.min(0.0), add.hi.max(0.0));
-            }
-            *out = out.add(add);
-        }
-    }
-    c.iter()
-        .all(|i| !i.is_empty() && i.lo.is_finite() && i.hi.is_finite())
-        .then_some(c)
-}
-
 // A ray parameter beyond which every ray of the cell is outside the
 // bounds: |d| ≥ 1 for both projections, so a point at parameter t is at
 // least t from its origin, and the distance from an origin in the cell
@@ -571,102 +530,27 @@ fn far_t(corners: &CornerRays, bounds: &IBox) -> f64 {
             }
         }
     }
-    far * (1.0 + 1e-9) + 1e-9
+    far * (1.0 + FAR_MARGIN) + FAR_MARGIN
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::camera::RayCamera;
-    use crate::scene::{Bounds, Camera, Light};
-
-    // The colour interval holds the shaded colour of every normal, view
-    // vector and point in its boxes (lights without shadows here).
-    #[test]
-    fn colour_interval_encloses_the_shading() {
-        let lights = [
-            Light {
-                kind: LightKind::Directional([-0.5, -1.0, -0.7]),
-                color: [1.0, 1.0, 1.0],
-                shadows: false,
-            },
-            Light {
-                kind: LightKind::Point([-4.0, 3.0, 5.0]),
-                color: [0.35, 0.35, 0.4],
-                shadows: false,
-            },
-        ];
-        let tr = Tracer {
-            cam: RayCamera::new(&Camera::default(), 8, 8).unwrap(),
-            evals: &[],
-            colors: vec![],
-            lights: &lights,
-            bounds: Bounds::default(),
-            diag: 7.0,
-            live_ops: vec![0; 1],
-            prune: false,
-            flat: false,
-        };
-        let color = [0.8, 0.3, 0.2];
-        let mut seed = 0x1234_5678_9abc_def0u64;
-        let mut rnd = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
-        for _ in 0..200 {
-            let g0 = [rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0];
-            let w = 0.3 * rnd();
-            let gb: IBox = std::array::from_fn(|i| Interval::new(g0[i], g0[i] + w));
-            let vb: IBox = [
-                Interval::new(0.4, 0.45),
-                Interval::new(0.3, 0.32),
-                Interval::new(0.8, 0.83),
-            ];
-            let pb: IBox = [Interval::new(0.1, 0.2); 3];
-            let (Some(nb), Some(vn)) = (normalize_box(&gb), normalize_box(&vb)) else {
-                continue;
-            };
-            let Some(ci) = colour_interval(&tr, color, &nb, &vn, &pb) else {
-                continue;
-            };
-            for _ in 0..20 {
-                let g: [f64; 3] = std::array::from_fn(|i| g0[i] + w * rnd());
-                let Some(n) = normalize(g) else { continue };
-                let v =
-                    normalize(std::array::from_fn(|i| vb[i].lo + rnd() * vb[i].width())).unwrap();
-                let p = [0.1 + 0.1 * rnd(), 0.1 + 0.1 * rnd(), 0.1 + 0.1 * rnd()];
-                let surf = shade::Surf {
-                    p,
-                    n,
-                    q: p,
-                    v,
-                    min_w: 1e-3,
-                    color,
-                };
-                let mut st = RenderStats::default();
-                let (c, _) = shade::shade(&tr, &surf, &[true, true], &mut st);
-                for ch in 0..3 {
-                    assert!(
-                        ci[ch].lo - 1e-12 <= c[ch] && c[ch] <= ci[ch].hi + 1e-12,
-                        "{ch}: {} not in {:?}",
-                        c[ch],
-                        ci[ch]
-                    );
-                }
-            }
-        }
-    }
 
     #[test]
     fn modes_parse() {
         assert_eq!(Aa::parse("none"), Ok(Aa::None));
         assert_eq!(Aa::parse("grid:4"), Ok(Aa::Grid(4)));
         assert!(matches!(Aa::parse("iaa"), Ok(Aa::Iaa { depth: 2, .. })));
-        assert!(Aa::parse("grid:0").is_err());
-        assert!(Aa::parse("grid:x").is_err());
-        assert!(Aa::parse("ssaa").is_err());
+        assert_eq!(Aa::parse("grid:0"), Err(AaError::GridOutOfRange(0)));
+        assert!(matches!(
+            Aa::parse("grid:x"),
+            Err(AaError::NotANumber { .. })
+        ));
+        assert_eq!(
+            Aa::parse("ssaa").map_err(|e| e.to_string()),
+            Err("anti-aliasing `ssaa` is not none, iaa or grid:N".to_string())
+        );
     }
 
     #[test]

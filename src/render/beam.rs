@@ -14,7 +14,9 @@
 //! on the point evaluator. Blocks that are neither split in four,
 //! keeping the rejected prefix and dropping objects proven positive over
 //! the whole remaining beam; single pixels get a guaranteed single ray
-//! ([`super::ray`]).
+//! ([`super::ray`]). The interval tests themselves (scene minimum over
+//! a beam piece, the sweep, the inclusion search) are shared with
+//! anti-aliasing in `super::probe`.
 //!
 //! A block whose rays' start points (each at its own clip start) all lie
 //! where F < 0 is settled at once: every ray hits at its start (cut-away
@@ -24,42 +26,13 @@
 //! surface, where the natural extension overestimates most.
 
 use super::camera::{CornerRays, PixelRay};
+use super::probe::{self, Form, Rect, Sweep};
 use super::ray::{refine, scene_point, trace_ray};
-use super::{Class, Hit, Tracer};
+use super::stats::RenderStats;
+use super::tracer::{TileState, Tracer};
+use super::{Class, Hit};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_hull, dot, ray_box};
-use crate::render::stats::RenderStats;
-
-// Rejection pieces per sweep before the block is declared undecided.
-const MAX_SWEEP_PIECES: usize = 256;
-
-/// The front-to-back rejection sweep of a beam over `[t0, t1]`, shared by
-/// the tracer and anti-aliasing: bisects nearest half first, drops every
-/// piece `excluded` proves free of surface, and returns the first piece it
-/// cannot drop once that piece is narrower than `min_w(start)` (or after
-/// [`MAX_SWEEP_PIECES`] pieces); `None` when the whole range is dropped.
-pub(crate) fn first_candidate(
-    t0: f64,
-    t1: f64,
-    min_w: impl Fn(f64) -> f64,
-    mut excluded: impl FnMut(Interval) -> bool,
-) -> Option<(f64, f64)> {
-    let mut stack = vec![(t0, t1)];
-    let mut pieces = 0usize;
-    while let Some((a, c)) = stack.pop() {
-        pieces += 1;
-        if excluded(Interval::new(a, c)) {
-            continue;
-        }
-        if c - a <= min_w(a) || pieces >= MAX_SWEEP_PIECES {
-            return Some((a, c));
-        }
-        let m = 0.5 * (a + c);
-        stack.push((m, c));
-        stack.push((a, m));
-    }
-    None
-}
 
 /// The per-pixel data of one tile.
 pub(crate) struct TileRays {
@@ -77,8 +50,8 @@ pub(crate) struct TileRays {
     pub hits: Vec<Option<Hit>>,
     /// How each pixel was decided.
     pub class: Vec<Class>,
-    /// Included blocks (x0, y0, x1, y1 in tile coordinates), for shadow beams.
-    pub included: Vec<(u32, u32, u32, u32)>,
+    /// Included blocks, for shadow beams.
+    pub included: Vec<Rect>,
 }
 
 impl TileRays {
@@ -87,19 +60,10 @@ impl TileRays {
     }
 }
 
-/// A block of pixels in tile coordinates, half-open.
-#[derive(Copy, Clone, Debug)]
-struct Block {
-    x0: u32,
-    y0: u32,
-    x1: u32,
-    y1: u32,
-}
-
 /// Traces every pixel of the tile with beams.
-pub(crate) fn trace_tile(tr: &Tracer<'_>, tile: &mut TileRays, h: u32, st: &mut RenderStats) {
+pub(crate) fn trace_tile(tr: &Tracer<'_>, tile: &mut TileRays, h: u32, st: &mut TileState) {
     let live: Vec<u32> = (0..tr.evals.len() as u32).collect();
-    let b = Block {
+    let b = Rect {
         x0: 0,
         y0: 0,
         x1: tile.w,
@@ -111,26 +75,24 @@ pub(crate) fn trace_tile(tr: &Tracer<'_>, tile: &mut TileRays, h: u32, st: &mut 
 fn block(
     tr: &Tracer<'_>,
     tile: &mut TileRays,
-    b: Block,
+    b: Rect,
     t_floor: f64,
     live: &[u32],
-    st: &mut RenderStats,
+    st: &mut TileState,
 ) {
     // The block's T range from its pixels' slabs.
     let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
-    for j in b.y0..b.y1 {
-        for i in b.x0..b.x1 {
-            if let Some((a, c)) = tile.slabs[tile.idx(i, j)] {
-                t0 = t0.min(a);
-                t1 = t1.max(c);
-            }
+    for (i, j) in b.pixels() {
+        if let Some((a, c)) = tile.slabs[tile.idx(i, j)] {
+            t0 = t0.min(a);
+            t1 = t1.max(c);
         }
     }
-    let single = b.x1 - b.x0 == 1 && b.y1 - b.y0 == 1;
+    let single = b.is_pixel();
     t0 = t0.max(t_floor);
     if t0.partial_cmp(&t1).is_none_or(|o| o.is_gt()) || live.is_empty() {
         if !single {
-            st.blocks_rejected += 1;
+            st.stats.blocks_rejected += 1;
         }
         set_block(tile, b, Class::Background);
         return;
@@ -144,84 +106,72 @@ fn block(
         // the first-root policy, are then those of `Method::Pixel`, and
         // both methods draw the same pixels. Re-rejecting the prefix costs
         // a few interval evaluations.
-        tile.hits[k] = trace_ray(tr, &ray, pt0, pt1, live, st);
+        tile.hits[k] = trace_ray(tr, &ray, pt0, pt1, live, &mut st.stats);
         tile.class[k] = Class::Ray;
         return;
     }
-    if t_floor <= t0 && all_start_inside(tr, tile, b, live, st) {
-        st.blocks_included += 1;
+    if t_floor <= t0 && all_start_inside(tr, tile, b, live, &mut st.stats) {
+        st.stats.blocks_included += 1;
         return;
     }
+    beam_tests(tr, tile, b, (t0, t1), live, st);
+}
+
+// The beam tests of a block of several pixels over its T range: rejected,
+// included (every ray's first root bracketed), or split in four.
+fn beam_tests(
+    tr: &Tracer<'_>,
+    tile: &mut TileRays,
+    b: Rect,
+    (t0, t1): (f64, f64),
+    live: &[u32],
+    st: &mut TileState,
+) {
     // Screen extents of the pixel centres.
     let xs = ((b.x0 + tile.x0) as f64 + 0.5, (b.x1 + tile.x0) as f64 - 0.5);
     let ys = ((b.y0 + tile.y0) as f64 + 0.5, (b.y1 + tile.y0) as f64 - 0.5);
     let side_px = (b.x1 - b.x0).max(b.y1 - b.y0);
     let side = f64::from(side_px);
-    let level = side_px.ilog2() as usize;
-    let min_w = |t: f64| side * tr.cam.spacing(t).max(1e-9);
+    let form = Form::Tight(side_px.ilog2() as usize);
+    let min_w = |t: f64| probe::min_width(tr, side, t);
     let corners = tr.cam.corners(xs, ys);
-    let eval_min = |t: Interval, st: &mut RenderStats| -> Interval {
-        let hb = corners.hull(t);
-        let mut f = Interval::point(f64::INFINITY);
-        for &k in live {
-            let v = tr.interval_tight(k as usize, hb, level, st);
-            if v.is_empty() {
-                continue;
-            }
-            f = f.min(v);
-        }
-        f
+    let eval_min = |t: Interval, st: &mut TileState| {
+        probe::scene_interval(tr, live, corners.hull(t), form, st)
     };
-    if tr.flat {
-        // f is constant along the rays: bisecting T cannot help.
-        if eval_min(Interval::new(t0, t1), st).lo > 0.0 {
-            st.blocks_rejected += 1;
+    let (ta, tb) = match probe::sweep(tr.flat, t0, t1, min_w, |t| eval_min(t, st).lo > 0.0) {
+        Sweep::Empty => {
+            st.stats.blocks_rejected += 1;
             set_block(tile, b, Class::Background);
-        } else {
-            st.blocks_undecided += 1;
+            return;
+        }
+        Sweep::Flat => {
+            st.stats.blocks_undecided += 1;
             // The tile already pruned to its beam over the whole depth; a
             // flat block's sub-blocks gain little from pruning again, and
             // it costs an interval pass and a rebuild per block (prospero
             // at 1024² measured no faster with it).
             split(tr, tile, b, t0, live, st);
+            return;
         }
-        return;
-    }
-    // Front-to-back rejection sweep.
-    let found = first_candidate(t0, t1, min_w, |t| eval_min(t, st).lo > 0.0);
-    let Some((ta, tb)) = found else {
-        st.blocks_rejected += 1;
-        set_block(tile, b, Class::Background);
-        return;
+        Sweep::Candidate(ta, tb) => (ta, tb),
     };
     // Inclusion test: positive at ta, negative at some tb' ahead.
-    let fa = eval_min(Interval::point(ta), st);
-    if fa.lo > 0.0 {
-        let w = (tb - ta).max(min_w(ta));
-        for mult in [1.0, 2.0, 4.0] {
-            let tb2 = (ta + mult * w).min(t1);
-            let fb = eval_min(Interval::point(tb2), st);
-            if fb.hi < 0.0 {
-                if decreasing(tr, &corners, Interval::new(ta, tb2), live, st) {
-                    st.blocks_included += 1;
-                    include_block(tr, tile, b, ta, tb2, live, st);
-                    return;
-                }
-                break;
-            }
-            if tb2 >= t1 {
-                break;
-            }
-        }
+    let end = probe::bracket_end((ta, tb), t1, min_w, |t| eval_min(Interval::point(t), st));
+    if let Some(tb2) = end
+        && decreasing(tr, &corners, Interval::new(ta, tb2), live, &mut st.stats)
+    {
+        st.stats.blocks_included += 1;
+        include_block(tr, tile, b, ta, tb2, live, &mut st.stats);
+        return;
     }
-    st.blocks_undecided += 1;
+    st.stats.blocks_undecided += 1;
     // Objects positive over the whole remaining beam are dropped below.
     let rest = corners.hull(Interval::new(ta, t1));
     let sub_live: Vec<u32> = live
         .iter()
         .copied()
         .filter(|&k| {
-            let v = tr.interval(k as usize, rest, st);
+            let v = tr.interval(k as usize, rest, &mut st.stats);
             !(v.is_empty() || v.lo > 0.0)
         })
         .collect();
@@ -238,18 +188,19 @@ const PRUNE_WINDOW: f64 = 8.0;
 
 // `split`, with the functions first pruned to the block's beam over
 // `window` (screen extents of its pixel centres) where that shrinks them
-// enough (see `super::prune_evals`).
+// enough (see `Tracer::pruned_to`).
 fn split_pruned(
     tr: &Tracer<'_>,
     tile: &mut TileRays,
-    b: Block,
+    b: Rect,
     (xs, ys, window): ((f64, f64), (f64, f64), Interval),
     t_floor: f64,
     live: &[u32],
-    st: &mut RenderStats,
+    st: &mut TileState,
 ) {
-    let pruned = super::beam_region(tr, xs, ys, window)
-        .and_then(|region| super::prune_evals(tr, region, st));
+    let pruned = tr
+        .beam_region(xs, ys, window)
+        .and_then(|region| tr.pruned_to(region, &mut st.stats));
     match pruned {
         Some((evals, live_ops)) => {
             let local = tr.with_evals(&evals, live_ops);
@@ -263,19 +214,13 @@ fn split_pruned(
 fn split(
     tr: &Tracer<'_>,
     tile: &mut TileRays,
-    b: Block,
+    b: Rect,
     t_floor: f64,
     live: &[u32],
-    st: &mut RenderStats,
+    st: &mut TileState,
 ) {
-    let mx = (b.x0 + b.x1).div_ceil(2);
-    let my = (b.y0 + b.y1).div_ceil(2);
-    for (x0, x1) in [(b.x0, mx), (mx, b.x1)] {
-        for (y0, y1) in [(b.y0, my), (my, b.y1)] {
-            if x0 < x1 && y0 < y1 {
-                block(tr, tile, Block { x0, y0, x1, y1 }, t_floor, live, st);
-            }
-        }
+    for q in b.quarters_by_column() {
+        block(tr, tile, q, t_floor, live, st);
     }
 }
 
@@ -295,8 +240,7 @@ fn decreasing(
     st: &mut RenderStats,
 ) -> bool {
     let hb = corners.hull(t);
-    let c = &corners.0;
-    let dirs = box_hull(box_hull(c[0].1, c[1].1), box_hull(c[2].1, c[3].1));
+    let dirs = corners.directions();
     live.iter().all(|&k| {
         let f = tr.interval(k as usize, hb, st);
         if f.is_empty() || f.lo > 0.0 {
@@ -314,19 +258,17 @@ fn decreasing(
 fn all_start_inside(
     tr: &Tracer<'_>,
     tile: &mut TileRays,
-    b: Block,
+    b: Rect,
     live: &[u32],
     st: &mut RenderStats,
 ) -> bool {
     let mut hull: Option<IBox> = None;
-    for j in b.y0..b.y1 {
-        for i in b.x0..b.x1 {
-            let k = tile.idx(i, j);
-            if let Some((pt0, _)) = tile.slabs[k] {
-                let r = &tile.rays[k];
-                let p = ray_box(r.o, r.d, Interval::point(pt0));
-                hull = Some(hull.map_or(p, |h| box_hull(h, p)));
-            }
+    for (i, j) in b.pixels() {
+        let k = tile.idx(i, j);
+        if let Some((pt0, _)) = tile.slabs[k] {
+            let r = &tile.rays[k];
+            let p = ray_box(r.o, r.d, Interval::point(pt0));
+            hull = Some(hull.map_or(p, |h| box_hull(h, p)));
         }
     }
     let Some(hull) = hull else {
@@ -350,25 +292,21 @@ fn all_start_inside(
     // inside. The single-ray start test is a point test, so each start is
     // confirmed the same way, keeping both methods' pixels identical.
     let mut starts = Vec::new();
-    for j in b.y0..b.y1 {
-        for i in b.x0..b.x1 {
-            let k = tile.idx(i, j);
-            if let Some((pt0, _)) = tile.slabs[k] {
-                let (v, obj) = scene_point(tr, live, tile.rays[k].at(pt0), st);
-                // NaN (undefined) is not inside.
-                if v.is_nan() || v >= 0.0 {
-                    return false;
-                }
-                starts.push((k, pt0, obj));
+    for (i, j) in b.pixels() {
+        let k = tile.idx(i, j);
+        if let Some((pt0, _)) = tile.slabs[k] {
+            let (v, obj) = scene_point(tr, live, tile.rays[k].at(pt0), st);
+            // NaN (undefined) is not inside.
+            if v.is_nan() || v >= 0.0 {
+                return false;
             }
+            starts.push((k, pt0, obj));
         }
     }
-    for j in b.y0..b.y1 {
-        for i in b.x0..b.x1 {
-            let k = tile.idx(i, j);
-            tile.class[k] = Class::Included;
-            tile.hits[k] = None;
-        }
+    for (i, j) in b.pixels() {
+        let k = tile.idx(i, j);
+        tile.class[k] = Class::Included;
+        tile.hits[k] = None;
     }
     for (k, t, obj) in starts {
         tile.hits[k] = Some(Hit {
@@ -384,52 +322,48 @@ fn all_start_inside(
 fn include_block(
     tr: &Tracer<'_>,
     tile: &mut TileRays,
-    b: Block,
+    b: Rect,
     ta: f64,
     tb: f64,
     live: &[u32],
     st: &mut RenderStats,
 ) {
-    for j in b.y0..b.y1 {
-        for i in b.x0..b.x1 {
-            let k = tile.idx(i, j);
-            let ray = tile.rays[k];
-            tile.class[k] = Class::Included;
-            let Some((pt0, pt1)) = tile.slabs[k] else {
-                tile.hits[k] = None;
-                continue;
-            };
-            st.pixels_refined += 1;
-            // The bracket is clipped to the pixel's own range first: a root
-            // just past the pixel's clip end (within the refinement
-            // tolerance) would otherwise be refined to a point inside it.
-            let (ca, cb) = (ta.max(pt0), tb.min(pt1));
-            let hit = if ca < cb {
-                refine(tr, &ray, live, ca, cb, st)
-            } else {
-                None
-            };
-            tile.hits[k] = match hit {
-                Some(h) if h.t >= pt0 && h.t <= pt1 => Some(h),
-                // The root lies outside this pixel's own clip range (only
-                // at the bounds' edges), or rounding hid the bracket's sign
-                // change: this pixel gets a full ray.
-                _ => {
-                    tile.class[k] = Class::Ray;
-                    trace_ray(tr, &ray, pt0, pt1, live, st)
-                }
-            };
-        }
+    for (i, j) in b.pixels() {
+        let k = tile.idx(i, j);
+        let ray = tile.rays[k];
+        tile.class[k] = Class::Included;
+        let Some((pt0, pt1)) = tile.slabs[k] else {
+            tile.hits[k] = None;
+            continue;
+        };
+        st.pixels_refined += 1;
+        // The bracket is clipped to the pixel's own range first: a root
+        // just past the pixel's clip end (within the refinement
+        // tolerance) would otherwise be refined to a point inside it.
+        let (ca, cb) = (ta.max(pt0), tb.min(pt1));
+        let hit = if ca < cb {
+            refine(tr, &ray, live, ca, cb, st)
+        } else {
+            None
+        };
+        tile.hits[k] = match hit {
+            Some(h) if h.t >= pt0 && h.t <= pt1 => Some(h),
+            // The root lies outside this pixel's own clip range (only
+            // at the bounds' edges), or rounding hid the bracket's sign
+            // change: this pixel gets a full ray.
+            _ => {
+                tile.class[k] = Class::Ray;
+                trace_ray(tr, &ray, pt0, pt1, live, st)
+            }
+        };
     }
-    tile.included.push((b.x0, b.y0, b.x1, b.y1));
+    tile.included.push(b);
 }
 
-fn set_block(tile: &mut TileRays, b: Block, c: Class) {
-    for j in b.y0..b.y1 {
-        for i in b.x0..b.x1 {
-            let k = tile.idx(i, j);
-            tile.hits[k] = None;
-            tile.class[k] = c;
-        }
+fn set_block(tile: &mut TileRays, b: Rect, c: Class) {
+    for (i, j) in b.pixels() {
+        let k = tile.idx(i, j);
+        tile.hits[k] = None;
+        tile.class[k] = c;
     }
 }

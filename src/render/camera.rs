@@ -16,6 +16,12 @@ pub use crate::interval::boxes::IBox;
 use crate::interval::boxes::{box_hull, ray_box};
 use crate::scene::{Bounds, Camera, Projection};
 
+/// Smallest depth tolerance, in t units.
+const TOLERANCE_FLOOR: f64 = 1e-9;
+/// Relative widening of a ray's slab range, so that rounding in the slab
+/// test never clips off a point inside the bounds.
+const SLAB_PAD: f64 = 1e-9;
+
 /// Why a camera cannot produce rays.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 pub enum CameraError {
@@ -231,7 +237,7 @@ impl RayCamera {
     /// (in t units; |d| ≥ 1, so the world error is at most
     /// `tolerance · |d|`), never below a tiny absolute floor.
     pub fn tolerance(&self, t: f64) -> f64 {
-        (0.25 * self.spacing(t)).max(1e-9)
+        (0.25 * self.spacing(t)).max(TOLERANCE_FLOOR)
     }
 }
 
@@ -249,6 +255,13 @@ impl CornerRays {
             }
         }
         out
+    }
+
+    /// A sound hull of the block's ray directions: the hull of the corner
+    /// directions, since a ray's direction is affine in its screen position.
+    pub fn directions(&self) -> IBox {
+        let c = &self.0;
+        box_hull(box_hull(c[0].1, c[1].1), box_hull(c[2].1, c[3].1))
     }
 }
 
@@ -287,8 +300,8 @@ impl PixelRay {
             let a = (b.min[i] - o) / d;
             let c = (b.max[i] - o) / d;
             let (lo, hi) = if a < c { (a, c) } else { (c, a) };
-            t0 = t0.max(lo - 1e-9 * (1.0 + lo.abs()));
-            t1 = t1.min(hi + 1e-9 * (1.0 + hi.abs()));
+            t0 = t0.max(lo - SLAB_PAD * (1.0 + lo.abs()));
+            t1 = t1.min(hi + SLAB_PAD * (1.0 + hi.abs()));
         }
         (t0 <= t1 && t1.is_finite()).then_some((t0, t1))
     }

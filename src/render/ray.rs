@@ -25,8 +25,9 @@
 //! start point has f < 0 (point evaluation) hits at t0: cut-away views of
 //! solids clipped by the bounds, and filled masks for 2D functions.
 
+use super::Hit;
 use super::camera::PixelRay;
-use super::{Hit, Tracer};
+use super::tracer::Tracer;
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, ray_box};
 use crate::render::stats::RenderStats;

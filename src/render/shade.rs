@@ -23,10 +23,10 @@
 //! `shadow_rays_saved`); only if it fails does each pixel test its own
 //! segment. Lights with `shadows: false` run no shadow code.
 
-use super::Tracer;
 use super::camera::{add, bounds_box, dot, normalize, scale, sub};
+use super::tracer::Tracer;
 use crate::interval::Interval;
-use crate::interval::boxes::{IBox, box_hull, box_meet, point_box};
+use crate::interval::boxes::{IBox, box_hull, box_meet, dot as dot_box, normalize_box, point_box};
 use crate::render::stats::RenderStats;
 use crate::scene::LightKind;
 
@@ -70,6 +70,8 @@ pub(crate) fn light_dir(
 /// surface. `starts` are the segments' start points (all inside `q`);
 /// they are proven outside every object only if the monotonicity test on
 /// the first piece needs it (one interval evaluation per point and object).
+// One front-to-back loop: every branch reads or sets `front_ok`, which
+// holds only because pieces are popped in order, so the loop stays whole.
 pub(crate) fn segment_free(
     tr: &Tracer<'_>,
     q: IBox,
@@ -307,4 +309,135 @@ pub(crate) fn shade(
         }
     }
     (c, shadowed)
+}
+
+/// Encloses the colour [`shade`] gives (shadows aside) for every
+/// unit normal in `n`, view vector in `v` and point in `p`.
+pub(crate) fn colour_interval(
+    tr: &Tracer<'_>,
+    color: [f64; 3],
+    n: &IBox,
+    v: &IBox,
+    p: &IBox,
+) -> Option<[Interval; 3]> {
+    let mut c: [Interval; 3] =
+        std::array::from_fn(|i| Interval::point(color[i]).mul(Interval::point(AMBIENT)));
+    for light in tr.lights {
+        let l: IBox = match light.kind {
+            LightKind::Directional(dir) => normalize(scale(dir, -1.0))?.map(Interval::point),
+            LightKind::Point(lp) => {
+                normalize_box(&std::array::from_fn(|i| Interval::point(lp[i]).sub(p[i])))?
+            }
+        };
+        let ndl = dot_box(n, &l);
+        if ndl.is_empty() {
+            return None;
+        }
+        if ndl.hi <= 0.0 {
+            continue;
+        }
+        let h = normalize_box(&std::array::from_fn(|i| l[i].add(v[i])))?;
+        let ndh = dot_box(n, &h);
+        let ndh = Interval::new(ndh.lo.max(0.0), ndh.hi.max(0.0));
+        let spec = Interval::point(SPECULAR).mul(ndh.powi(SHININESS));
+        let lam = Interval::new(ndl.lo.max(0.0), ndl.hi);
+        for (ch, out) in c.iter_mut().enumerate() {
+            let mut add =
+                Interval::point(light.color[ch]).mul(Interval::point(color[ch]).mul(lam).add(spec));
+            if ndl.lo <= 0.0 {
+                // The light may be behind the surface for some normals.
+                add = Interval::new(add.lo.min(0.0), add.hi.max(0.0));
+            }
+            *out = out.add(add);
+        }
+    }
+    c.iter()
+        .all(|i| !i.is_empty() && i.lo.is_finite() && i.hi.is_finite())
+        .then_some(c)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::camera::RayCamera;
+    use crate::scene::{Bounds, Camera, Light};
+
+    // The colour interval holds the shaded colour of every normal, view
+    // vector and point in its boxes (lights without shadows here).
+    #[test]
+    fn colour_interval_encloses_the_shading() {
+        let lights = [
+            Light {
+                kind: LightKind::Directional([-0.5, -1.0, -0.7]),
+                color: [1.0, 1.0, 1.0],
+                shadows: false,
+            },
+            Light {
+                kind: LightKind::Point([-4.0, 3.0, 5.0]),
+                color: [0.35, 0.35, 0.4],
+                shadows: false,
+            },
+        ];
+        let tr = Tracer {
+            cam: RayCamera::new(&Camera::default(), 8, 8).unwrap(),
+            evals: &[],
+            colors: vec![],
+            lights: &lights,
+            bounds: Bounds::default(),
+            diag: 7.0,
+            live_ops: vec![0; 1],
+            prune: false,
+            flat: false,
+        };
+        let color = [0.8, 0.3, 0.2];
+        let mut seed = 0x1234_5678_9abc_def0u64;
+        let mut rnd = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..200 {
+            let g0 = [rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0];
+            let w = 0.3 * rnd();
+            let gb: IBox = std::array::from_fn(|i| Interval::new(g0[i], g0[i] + w));
+            let vb: IBox = [
+                Interval::new(0.4, 0.45),
+                Interval::new(0.3, 0.32),
+                Interval::new(0.8, 0.83),
+            ];
+            let pb: IBox = [Interval::new(0.1, 0.2); 3];
+            let (Some(nb), Some(vn)) = (normalize_box(&gb), normalize_box(&vb)) else {
+                continue;
+            };
+            let Some(ci) = colour_interval(&tr, color, &nb, &vn, &pb) else {
+                continue;
+            };
+            for _ in 0..20 {
+                let g: [f64; 3] = std::array::from_fn(|i| g0[i] + w * rnd());
+                let Some(n) = normalize(g) else { continue };
+                let v =
+                    normalize(std::array::from_fn(|i| vb[i].lo + rnd() * vb[i].width())).unwrap();
+                let p = [0.1 + 0.1 * rnd(), 0.1 + 0.1 * rnd(), 0.1 + 0.1 * rnd()];
+                let surf = Surf {
+                    p,
+                    n,
+                    q: p,
+                    v,
+                    min_w: 1e-3,
+                    color,
+                };
+                let mut st = RenderStats::default();
+                let (c, _) = shade(&tr, &surf, &[true, true], &mut st);
+                for ch in 0..3 {
+                    assert!(
+                        ci[ch].lo - 1e-12 <= c[ch] && c[ch] <= ci[ch].hi + 1e-12,
+                        "{ch}: {} not in {:?}",
+                        c[ch],
+                        ci[ch]
+                    );
+                }
+            }
+        }
+    }
 }

@@ -1,110 +1,185 @@
 //! Render counters: gathered per tile, merged in tile order at the end, so
 //! every count is the same for any thread count (times are not).
+//!
+//! The counters are declared once, in the `counters!` list below: it
+//! makes the struct, its merge and its text form, and serde makes its JSON,
+//! so a new counter is one line of that list.
 
 use std::fmt;
 
-/// What a render did and how long it took.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct RenderStats {
-    /// Image width in pixels.
-    pub width: u32,
-    /// Image height in pixels.
-    pub height: u32,
-    /// Pixels whose ray hit a surface.
-    pub pixels_hit: u64,
-    /// Single rays traced (interval rays for beam/pixel, marches for point).
-    pub rays: u64,
-    /// Pixels of included blocks, which refine a bracketed root (no ray).
-    pub pixels_refined: u64,
-    /// Interval (and interval-gradient) evaluations of one object.
-    pub interval_evals: u64,
-    /// Point (and point-gradient) evaluations of one object.
-    pub point_evals: u64,
-    /// Per-pixel shadow segments tested.
-    pub shadow_rays: u64,
-    /// Per-pixel shadow segments made unnecessary by a block shadow beam.
-    pub shadow_rays_saved: u64,
-    /// Shadow beams that proved a whole block lit.
-    pub shadow_beams_ok: u64,
-    /// Shadow beams tried.
-    pub shadow_beams: u64,
-    /// Mean-value tightenings of a block interval tried.
-    pub mean_value_tries: u64,
-    /// Mean-value tightenings that proved a sign the natural form did not.
-    pub mean_value_wins: u64,
-    /// Mean-value (tries, wins) per block-size class, log2 of the side;
-    /// drives the per-tile choice to use the form (not in the JSON).
-    pub mean_value_levels: [(u64, u64); super::MV_LEVELS],
-    /// Blocks (over one pixel) whose whole ray range was rejected.
-    pub blocks_rejected: u64,
-    /// Blocks (over one pixel) settled by the inclusion test.
-    pub blocks_included: u64,
-    /// Blocks (over one pixel) split or handed to single rays.
-    pub blocks_undecided: u64,
-    /// Samples summed over pixels (a rejected sub-pixel cell counts as
-    /// one sample, traced by no ray).
-    pub aa_samples: u64,
-    /// Most samples in one pixel.
-    pub aa_samples_max: u64,
-    /// Pixels given more than one sample.
-    pub aa_pixels_split: u64,
-    /// IAA pixels split only because their colour interval was too wide
-    /// (their beam passed the inclusion test).
-    pub aa_split_by_shading: u64,
-    /// Anti-aliasing tests and extra samples, summed over threads, ms.
-    pub aa_cpu_ms: f64,
-    /// Live ops of the functions that were pruned to a tile, summed over
-    /// tiles (see `crate::ir::prune`).
-    pub pruned_ops_before: u64,
-    /// Live ops of those functions after pruning, summed over tiles.
-    pub pruned_ops_after: u64,
-    /// Render wall time, ms (excludes parsing and compiling).
-    pub time_ms: f64,
-    /// Time to build the evaluators and compile their native code, ms.
-    pub compile_ms: f64,
-    /// Visibility (beams, rays, root refinement), summed over threads, ms.
-    pub trace_cpu_ms: f64,
-    /// Shading without shadows, summed over threads, ms.
-    pub shade_cpu_ms: f64,
-    /// Shadow tests, summed over threads, ms.
-    pub shadow_cpu_ms: f64,
-    /// Building the output images after tracing, wall ms.
-    pub output_ms: f64,
+use serde::Serialize;
+
+// How a field combines when tiles merge.
+mod combine {
+    // Work counted per tile: tiles add up.
+    pub(super) fn sum<T: std::ops::AddAssign>(a: &mut T, b: T) {
+        *a += b;
+    }
+    // A per-tile extreme: the largest wins.
+    pub(super) fn max<T: PartialOrd>(a: &mut T, b: T) {
+        if b > *a {
+            *a = b;
+        }
+    }
+    // Set once for the whole render (size, wall times): tiles add nothing.
+    pub(super) fn once<T>(_: &mut T, _: T) {}
+}
+
+// One statistic's text form: counts as they are, times to a tenth of a ms.
+trait Show {
+    fn show(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result;
+}
+
+impl Show for u32 {
+    fn show(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{self}")
+    }
+}
+
+impl Show for u64 {
+    fn show(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{self}")
+    }
+}
+
+impl Show for f64 {
+    fn show(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{self:.1}")
+    }
+}
+
+// Declares `RenderStats` from groups of fields, each `name: type => how`
+// (`how` one of the `combine` functions), and derives from the same list
+// its merge and its text form (one line per group).
+macro_rules! counters {
+    ($(
+        $group:literal {
+            $( $(#[$meta:meta])* $name:ident : $ty:ty => $how:ident, )*
+        }
+    )*) => {
+        /// What a render did and how long it took.
+        #[derive(Clone, Debug, Default, PartialEq, Serialize)]
+        pub struct RenderStats {
+            $($( $(#[$meta])* pub $name: $ty, )*)*
+        }
+
+        impl RenderStats {
+            /// Adds the counters and CPU times of `o` (a tile) into `self`;
+            /// the render-wide values (size, wall times) are left as they are.
+            pub fn merge(&mut self, o: &RenderStats) {
+                $($( combine::$how(&mut self.$name, o.$name); )*)*
+            }
+        }
+
+        impl fmt::Display for RenderStats {
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                let groups: &[(&str, &[(&str, &dyn Show)])] = &[$(
+                    ($group, &[$( (stringify!($name), &self.$name as &dyn Show), )*]),
+                )*];
+                for (i, (group, fields)) in groups.iter().enumerate() {
+                    if i > 0 {
+                        writeln!(f)?;
+                    }
+                    write!(f, "{group}:")?;
+                    for (j, (name, value)) in fields.iter().enumerate() {
+                        write!(f, "{} {name} ", if j == 0 { "" } else { "," })?;
+                        value.show(f)?;
+                    }
+                }
+                Ok(())
+            }
+        }
+    };
+}
+
+counters! {
+    "image" {
+        /// Image width in pixels.
+        width: u32 => once,
+        /// Image height in pixels.
+        height: u32 => once,
+        /// Pixels whose ray hit a surface.
+        pixels_hit: u64 => sum,
+    }
+    "visibility" {
+        /// Single rays traced (interval rays for beam/pixel, marches for point).
+        rays: u64 => sum,
+        /// Pixels of included blocks, which refine a bracketed root (no ray).
+        pixels_refined: u64 => sum,
+        /// Blocks (over one pixel) whose whole ray range was rejected.
+        blocks_rejected: u64 => sum,
+        /// Blocks (over one pixel) settled by the inclusion test.
+        blocks_included: u64 => sum,
+        /// Blocks (over one pixel) split or handed to single rays.
+        blocks_undecided: u64 => sum,
+    }
+    "evaluations" {
+        /// Interval (and interval-gradient) evaluations of one object.
+        interval_evals: u64 => sum,
+        /// Point (and point-gradient) evaluations of one object.
+        point_evals: u64 => sum,
+        /// Mean-value tightenings of a block interval tried.
+        mean_value_tries: u64 => sum,
+        /// Mean-value tightenings that proved a sign the natural form did not.
+        mean_value_wins: u64 => sum,
+        /// Live ops of the functions that were pruned to a tile, summed over
+        /// tiles (see `crate::ir::prune`).
+        pruned_ops_before: u64 => sum,
+        /// Live ops of those functions after pruning, summed over tiles.
+        pruned_ops_after: u64 => sum,
+    }
+    "shadows" {
+        /// Per-pixel shadow segments tested.
+        shadow_rays: u64 => sum,
+        /// Per-pixel shadow segments made unnecessary by a block shadow beam.
+        shadow_rays_saved: u64 => sum,
+        /// Shadow beams that proved a whole block lit.
+        shadow_beams_ok: u64 => sum,
+        /// Shadow beams tried.
+        shadow_beams: u64 => sum,
+    }
+    "anti-aliasing" {
+        /// Samples summed over pixels (a rejected sub-pixel cell counts as
+        /// one sample, traced by no ray); the JSON has the mean instead
+        /// ([`RenderStats::aa_samples_mean`]).
+        #[serde(skip)]
+        aa_samples: u64 => sum,
+        /// Most samples in one pixel.
+        aa_samples_max: u64 => max,
+        /// Pixels given more than one sample.
+        aa_pixels_split: u64 => sum,
+        /// IAA pixels split only because their colour interval was too wide
+        /// (their beam passed the inclusion test).
+        aa_split_by_shading: u64 => sum,
+    }
+    "ms" {
+        /// Render wall time, ms (excludes parsing and compiling).
+        time_ms: f64 => once,
+        /// Time to build the evaluators and compile their native code, ms.
+        compile_ms: f64 => once,
+        /// Visibility (beams, rays, root refinement), summed over threads, ms.
+        trace_cpu_ms: f64 => sum,
+        /// Shading without shadows, summed over threads, ms.
+        shade_cpu_ms: f64 => sum,
+        /// Shadow tests, summed over threads, ms.
+        shadow_cpu_ms: f64 => sum,
+        /// Anti-aliasing tests and extra samples, summed over threads, ms.
+        aa_cpu_ms: f64 => sum,
+        /// Building the output images after tracing, wall ms.
+        output_ms: f64 => once,
+    }
+}
+
+/// The JSON form: every field under its own name, the sample count as a
+/// per-pixel mean.
+#[derive(Serialize)]
+struct Json<'a> {
+    #[serde(flatten)]
+    stats: &'a RenderStats,
+    aa_samples_mean: f64,
 }
 
 impl RenderStats {
-    /// Adds the counters and CPU times of `o` (a tile) into `self`.
-    pub fn merge(&mut self, o: &RenderStats) {
-        self.pixels_hit += o.pixels_hit;
-        self.rays += o.rays;
-        self.pixels_refined += o.pixels_refined;
-        self.interval_evals += o.interval_evals;
-        self.point_evals += o.point_evals;
-        self.shadow_rays += o.shadow_rays;
-        self.shadow_rays_saved += o.shadow_rays_saved;
-        self.shadow_beams_ok += o.shadow_beams_ok;
-        self.shadow_beams += o.shadow_beams;
-        self.mean_value_tries += o.mean_value_tries;
-        self.mean_value_wins += o.mean_value_wins;
-        for (a, b) in self.mean_value_levels.iter_mut().zip(&o.mean_value_levels) {
-            a.0 += b.0;
-            a.1 += b.1;
-        }
-        self.blocks_rejected += o.blocks_rejected;
-        self.blocks_included += o.blocks_included;
-        self.blocks_undecided += o.blocks_undecided;
-        self.aa_samples += o.aa_samples;
-        self.aa_samples_max = self.aa_samples_max.max(o.aa_samples_max);
-        self.aa_pixels_split += o.aa_pixels_split;
-        self.aa_split_by_shading += o.aa_split_by_shading;
-        self.aa_cpu_ms += o.aa_cpu_ms;
-        self.pruned_ops_before += o.pruned_ops_before;
-        self.pruned_ops_after += o.pruned_ops_after;
-        self.trace_cpu_ms += o.trace_cpu_ms;
-        self.shade_cpu_ms += o.shade_cpu_ms;
-        self.shadow_cpu_ms += o.shadow_cpu_ms;
-    }
-
     /// Mean samples per pixel.
     pub fn aa_samples_mean(&self) -> f64 {
         let px = u64::from(self.width) * u64::from(self.height);
@@ -118,92 +193,73 @@ impl RenderStats {
     /// The statistics as a JSON object (key names = field names, and
     /// `aa_samples_mean` in place of `aa_samples`).
     pub fn to_json(&self) -> serde_json::Value {
-        serde_json::json!({
-            "width": self.width,
-            "height": self.height,
-            "pixels_hit": self.pixels_hit,
-            "rays": self.rays,
-            "pixels_refined": self.pixels_refined,
-            "interval_evals": self.interval_evals,
-            "point_evals": self.point_evals,
-            "shadow_rays": self.shadow_rays,
-            "shadow_rays_saved": self.shadow_rays_saved,
-            "shadow_beams_ok": self.shadow_beams_ok,
-            "shadow_beams": self.shadow_beams,
-            "mean_value_tries": self.mean_value_tries,
-            "mean_value_wins": self.mean_value_wins,
-            "blocks_rejected": self.blocks_rejected,
-            "blocks_included": self.blocks_included,
-            "blocks_undecided": self.blocks_undecided,
-            "aa_samples_mean": self.aa_samples_mean(),
-            "aa_samples_max": self.aa_samples_max,
-            "aa_pixels_split": self.aa_pixels_split,
-            "aa_split_by_shading": self.aa_split_by_shading,
-            "aa_cpu_ms": self.aa_cpu_ms,
-            "pruned_ops_before": self.pruned_ops_before,
-            "pruned_ops_after": self.pruned_ops_after,
-            "time_ms": self.time_ms,
-            "compile_ms": self.compile_ms,
-            "trace_cpu_ms": self.trace_cpu_ms,
-            "shade_cpu_ms": self.shade_cpu_ms,
-            "shadow_cpu_ms": self.shadow_cpu_ms,
-            "output_ms": self.output_ms,
-        })
+        let json = Json {
+            stats: self,
+            aa_samples_mean: self.aa_samples_mean(),
+        };
+        // Numbers and strings only: nothing here can fail to serialise.
+        serde_json::to_value(json).expect("render statistics serialise")
     }
 }
 
-impl fmt::Display for RenderStats {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let px = u64::from(self.width) * u64::from(self.height);
-        writeln!(
-            f,
-            "{}x{}: {} of {} pixels hit in {:.1} ms (compile {:.1} ms)",
-            self.width, self.height, self.pixels_hit, px, self.time_ms, self.compile_ms
-        )?;
-        writeln!(
-            f,
-            "rays {}, refined pixels {}, blocks rejected/included/undecided {}/{}/{}",
-            self.rays,
-            self.pixels_refined,
-            self.blocks_rejected,
-            self.blocks_included,
-            self.blocks_undecided
-        )?;
-        writeln!(
-            f,
-            "evaluations: interval {}, point {}",
-            self.interval_evals, self.point_evals
-        )?;
-        writeln!(
-            f,
-            "shadow rays {}, saved by {} of {} shadow beams {}",
-            self.shadow_rays, self.shadow_beams_ok, self.shadow_beams, self.shadow_rays_saved
-        )?;
-        writeln!(
-            f,
-            "anti-aliasing: {:.2} samples per pixel (max {}), {} pixels split ({} by shading alone)",
-            self.aa_samples_mean(),
-            self.aa_samples_max,
-            self.aa_pixels_split,
-            self.aa_split_by_shading
-        )?;
-        if self.pruned_ops_before > 0 {
-            writeln!(
-                f,
-                "pruned per tile: {} ops evaluated as {} ({:.1}%)",
-                self.pruned_ops_before,
-                self.pruned_ops_after,
-                100.0 * self.pruned_ops_after as f64 / self.pruned_ops_before as f64
-            )?;
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn merge_sums_counts_keeps_the_largest_max_and_leaves_render_values() {
+        let mut a = RenderStats {
+            width: 8,
+            rays: 2,
+            aa_samples_max: 4,
+            time_ms: 1.0,
+            ..RenderStats::default()
+        };
+        let b = RenderStats {
+            width: 3,
+            rays: 5,
+            aa_samples_max: 9,
+            time_ms: 7.0,
+            trace_cpu_ms: 2.5,
+            ..RenderStats::default()
+        };
+        a.merge(&b);
+        assert_eq!((a.width, a.rays, a.aa_samples_max), (8, 7, 9));
+        assert_eq!((a.time_ms, a.trace_cpu_ms), (1.0, 2.5));
+    }
+
+    #[test]
+    fn json_has_every_field_and_the_sample_mean() {
+        let st = RenderStats {
+            width: 2,
+            height: 2,
+            aa_samples: 10,
+            rays: 3,
+            ..RenderStats::default()
+        };
+        let json = st.to_json();
+        let obj = json.as_object().unwrap();
+        assert_eq!(obj.len(), 29);
+        assert!(obj.get("aa_samples").is_none());
+        assert_eq!(json["aa_samples_mean"], 2.5);
+        assert_eq!(json["rays"], 3);
+        assert_eq!(json["output_ms"], 0.0);
+    }
+
+    #[test]
+    fn the_text_form_shows_every_field() {
+        let text = RenderStats::default().to_string();
+        let json = RenderStats::default().to_json();
+        for key in json.as_object().unwrap().keys() {
+            let name = if key == "aa_samples_mean" {
+                "aa_samples"
+            } else {
+                key
+            };
+            assert!(
+                text.contains(&format!(" {name} ")),
+                "{name} missing from {text}"
+            );
         }
-        write!(
-            f,
-            "cpu ms: trace {:.1}, shade {:.1}, shadow {:.1}, aa {:.1}; output {:.1} ms",
-            self.trace_cpu_ms,
-            self.shade_cpu_ms,
-            self.shadow_cpu_ms,
-            self.aa_cpu_ms,
-            self.output_ms
-        )
     }
 }

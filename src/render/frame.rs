@@ -1,0 +1,353 @@
+//! A whole render: the options checked, the image cut into tiles traced in
+//! parallel (each with its anti-aliasing), and the tiles' outputs and
+//! counters merged in tile order into the images.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use image::Rgb;
+use rayon::prelude::*;
+
+use super::aa::{self, Aa, AaError};
+use super::camera::{self, RayCamera};
+use super::stats::RenderStats;
+use super::tile::{TileOut, TileSpec, ms_since, render_tile};
+use super::tracer::Tracer;
+use super::{MAX_SIZE, RenderError, RenderOptions, RenderOutput, TILE, output};
+use crate::eval::Evaluator;
+use crate::scene::Scene;
+
+/// Renders `scene` with one evaluator per object (same order):
+/// `evaluators[i]` evaluates `scene.objects[i].function` (the renderer
+/// reads the functions only to see which of x, y, z they use).
+pub fn render(
+    scene: &Scene,
+    evaluators: &[Arc<dyn Evaluator>],
+    opts: &RenderOptions,
+) -> Result<RenderOutput, RenderError> {
+    render_aa(scene, evaluators, opts, Aa::None)
+}
+
+/// [`render`] with anti-aliasing (see [`aa`]). The depth, normal and
+/// classification images of a `grid:N` render show one sample per pixel
+/// (the one right of and below the centre).
+pub fn render_aa(
+    scene: &Scene,
+    evaluators: &[Arc<dyn Evaluator>],
+    opts: &RenderOptions,
+    aa: Aa,
+) -> Result<RenderOutput, RenderError> {
+    let start = Instant::now();
+    let compiled_before = compile_ms(evaluators);
+    check(scene, evaluators, opts, aa)?;
+    let (w, h) = (opts.width, opts.height);
+    let s = aa.grid_factor();
+    let cam = RayCamera::new(&scene.camera, w * s, h * s).map_err(RenderError::Camera)?;
+    let tr = Tracer::new(scene, evaluators, cam, opts.prune);
+    // IAA traces split pixels' sub-samples on the 2^depth× image, with its
+    // tighter depth tolerance (the samples are those of grid:2^depth).
+    let fine = match aa {
+        Aa::Iaa { depth, .. } => Some(tr.with_camera(
+            RayCamera::new(&scene.camera, w << depth, h << depth).map_err(RenderError::Camera)?,
+        )),
+        _ => None,
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(opts.threads.unwrap_or(0))
+        .build()
+        .map_err(|e| RenderError::Threads(e.to_string()))?;
+    let tiles = tiles(w, h);
+    let done = AtomicUsize::new(0);
+    let bg = scene.render.background;
+    let outs: Vec<TileOut> = pool.install(|| {
+        tiles
+            .par_iter()
+            .map(|&(x0, y0, tw, th)| {
+                let spec = TileSpec {
+                    x0: x0 * s,
+                    y0: y0 * s,
+                    w: tw * s,
+                    h: th * s,
+                    mask: None,
+                };
+                let mut out = render_tile(&tr, opts, spec, bg);
+                if s > 1 {
+                    out = downsample(out, s);
+                }
+                anti_alias(&tr, fine.as_ref(), opts, aa, &mut out, bg);
+                let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+                if opts.progress {
+                    eprint!("\rrendering: {n}/{} tiles", tiles.len());
+                }
+                out
+            })
+            .collect()
+    });
+    if opts.progress {
+        eprintln!();
+    }
+    let mut out = assemble(&outs, opts, bg);
+    // Native code compiles lazily, on an evaluator kind's first use during
+    // the render; that time is reported as compilation, not rendering.
+    let lazy_compile_ms = compile_ms(evaluators) - compiled_before;
+    out.stats.compile_ms += lazy_compile_ms;
+    out.stats.time_ms = ms_since(start) - lazy_compile_ms;
+    Ok(out)
+}
+
+// Time the evaluators have spent compiling native code so far, ms.
+fn compile_ms(evals: &[Arc<dyn Evaluator>]) -> f64 {
+    evals
+        .iter()
+        .map(|e| e.compile_time().as_secs_f64())
+        .sum::<f64>()
+        * 1e3
+}
+
+// Refuses options, scenes and evaluators that cannot be rendered.
+fn check(
+    scene: &Scene,
+    evaluators: &[Arc<dyn Evaluator>],
+    opts: &RenderOptions,
+    aa: Aa,
+) -> Result<(), RenderError> {
+    let (w, h) = (opts.width, opts.height);
+    if w == 0 || h == 0 || w > MAX_SIZE || h > MAX_SIZE {
+        return Err(RenderError::BadSize(w, h));
+    }
+    aa.validate().map_err(RenderError::BadAa)?;
+    let s = aa.grid_factor();
+    if u64::from(w.max(h)) * u64::from(s) > u64::from(u32::MAX / 2) {
+        return Err(RenderError::BadAa(AaError::TooManySamples {
+            grid: s,
+            width: w,
+            height: h,
+        }));
+    }
+    if scene.objects.is_empty() {
+        return Err(RenderError::NoObjects);
+    }
+    if evaluators.len() != scene.objects.len() {
+        return Err(RenderError::EvaluatorCount {
+            objects: scene.objects.len(),
+            evaluators: evaluators.len(),
+        });
+    }
+    let b = scene.bounds;
+    if !(0..3).all(|i| b.min[i].is_finite() && b.max[i].is_finite() && b.min[i] <= b.max[i]) {
+        return Err(RenderError::BadBounds);
+    }
+    // EMPTY over the whole bounds proves f undefined at every point there:
+    // say so rather than draw an empty image.
+    let whole = camera::bounds_box(&b);
+    for (o, e) in scene.objects.iter().zip(evaluators) {
+        // The interpreter answers this one question without compiling.
+        let f = match e.function() {
+            Some(f) => crate::eval::interp::Interpreter::new(f.clone()).interval(whole),
+            None => e.interval(whole),
+        };
+        if f.is_empty() {
+            return Err(RenderError::Undefined(o.name.clone()));
+        }
+    }
+    Ok(())
+}
+
+// The tiles of a w×h image, row by row: (x0, y0, width, height).
+fn tiles(w: u32, h: u32) -> Vec<(u32, u32, u32, u32)> {
+    let mut tiles = Vec::new();
+    for y0 in (0..h).step_by(TILE as usize) {
+        for x0 in (0..w).step_by(TILE as usize) {
+            tiles.push((x0, y0, TILE.min(w - x0), TILE.min(h - y0)));
+        }
+    }
+    tiles
+}
+
+// The render's images and counters from its tiles, in tile order (times
+// other than the output's own are left to the caller).
+fn assemble(outs: &[TileOut], opts: &RenderOptions, bg_linear: [f64; 3]) -> RenderOutput {
+    let out_start = Instant::now();
+    let (w, h) = (opts.width, opts.height);
+    let npx = (w as usize) * (h as usize);
+    let mut stats = RenderStats {
+        width: w,
+        height: h,
+        ..RenderStats::default()
+    };
+    let mut color = vec![output::srgb_pixel(bg_linear); npx];
+    let mut linear = vec![bg_linear; npx];
+    let mut coverage = vec![0.0; npx];
+    let mut samples = vec![1u32; npx];
+    let mut hit_mask = vec![false; npx];
+    let mut depth_t = vec![f64::INFINITY; npx];
+    let mut normals = opts.want_normals.then(|| vec![Rgb([0u8; 3]); npx]);
+    let mut class = opts.want_classify.then(|| vec![Rgb([0u8; 3]); npx]);
+    for t in outs {
+        stats.merge(&t.state.stats);
+        for j in 0..t.h {
+            for i in 0..t.w {
+                let src = (j * t.w + i) as usize;
+                let dst = ((t.y0 + j) as usize) * (w as usize) + (t.x0 + i) as usize;
+                color[dst] = output::srgb_pixel(t.linear[src]);
+                linear[dst] = t.linear[src];
+                coverage[dst] = t.coverage[src];
+                samples[dst] = t.samples[src];
+                depth_t[dst] = t.depth[src];
+                hit_mask[dst] = t.depth[src].is_finite();
+                if let (Some(n), Some(tn)) = (normals.as_mut(), t.normals.as_ref()) {
+                    n[dst] = tn[src];
+                }
+                if let (Some(c), Some(tc)) = (class.as_mut(), t.class.as_ref()) {
+                    c[dst] = tc[src];
+                }
+            }
+        }
+    }
+    stats.pixels_hit = hit_mask.iter().filter(|&&m| m).count() as u64;
+    let image = output::rgb_image(w, h, &color);
+    let depth = opts.want_depth.then(|| output::depth_image(w, h, &depth_t));
+    let normals = normals.map(|px| output::rgb_image(w, h, &px));
+    let classify = class.map(|px| output::rgb_image(w, h, &px));
+    stats.output_ms = ms_since(out_start);
+    RenderOutput {
+        image,
+        depth,
+        normals,
+        classify,
+        hit_mask,
+        depth_t,
+        linear,
+        coverage,
+        samples,
+        stats,
+    }
+}
+
+// Averages each s×s block of a tile traced at s× resolution, in linear
+// light. Depth: the nearest hit; normals and classes: the sample at
+// (s/2, s/2) of the block.
+fn downsample(t: TileOut, s: u32) -> TileOut {
+    let (w, h) = (t.w / s, t.h / s);
+    let n = (w * h) as usize;
+    let inv = 1.0 / f64::from(s * s);
+    let mut linear = vec![[0.0; 3]; n];
+    let mut coverage = vec![0.0; n];
+    let mut depth = vec![f64::INFINITY; n];
+    let pick = |v: &Vec<Rgb<u8>>| -> Vec<Rgb<u8>> {
+        (0..h)
+            .flat_map(|j| (0..w).map(move |i| (i, j)))
+            .map(|(i, j)| v[((j * s + s / 2) * t.w + i * s + s / 2) as usize])
+            .collect()
+    };
+    for j in 0..h {
+        for i in 0..w {
+            let k = (j * w + i) as usize;
+            for sj in 0..s {
+                for si in 0..s {
+                    let src = ((j * s + sj) * t.w + i * s + si) as usize;
+                    for (l, v) in linear[k].iter_mut().zip(t.linear[src]) {
+                        *l += v * inv;
+                    }
+                    if t.depth[src].is_finite() {
+                        coverage[k] += inv;
+                        depth[k] = depth[k].min(t.depth[src]);
+                    }
+                }
+            }
+        }
+    }
+    TileOut {
+        x0: t.x0 / s,
+        y0: t.y0 / s,
+        w,
+        h,
+        linear,
+        // Anti-aliasing on a supersampled image never reads this.
+        shadowed: vec![0; n],
+        coverage,
+        samples: vec![s * s; n],
+        depth,
+        normals: t.normals.as_ref().map(pick),
+        class: t.class.as_ref().map(pick),
+        state: t.state,
+    }
+}
+
+// Applies IAA to a tile (or, for the other modes, counts its samples):
+// pixel-area tests, then the split pixels traced together at the fine
+// resolution (`fine`: the tracer of the 2^depth× image), with beams, their
+// other sub-samples masked out.
+fn anti_alias(
+    tr: &Tracer<'_>,
+    fine: Option<&Tracer<'_>>,
+    opts: &RenderOptions,
+    aa: Aa,
+    t: &mut TileOut,
+    bg: [f64; 3],
+) {
+    let (Aa::Iaa { threshold, depth }, Some(fine)) = (aa, fine) else {
+        let n = u64::from(t.w * t.h);
+        let per = u64::from(aa.grid_factor()).pow(2);
+        let st = &mut t.state.stats;
+        st.aa_samples += n * per;
+        st.aa_samples_max = st.aa_samples_max.max(per);
+        if per > 1 {
+            st.aa_pixels_split += n;
+        }
+        return;
+    };
+    let t0 = Instant::now();
+    // The pixel-area tests carry on with the tile's own state: the
+    // mean-value record of its base render included.
+    let mut st = std::mem::take(&mut t.state);
+    let mut px = aa::TilePixels {
+        x0: t.x0,
+        y0: t.y0,
+        w: t.w,
+        h: t.h,
+        linear: &mut t.linear,
+        depth: &mut t.depth,
+        coverage: &mut t.coverage,
+        samples: &mut t.samples,
+        shadowed: &t.shadowed,
+    };
+    let split = aa::classify_tile(tr, &mut px, bg, threshold, &mut st);
+    let f = 1u32 << depth;
+    let sub = (depth > 0 && split.iter().any(|&s| s)).then(|| {
+        let (fw, fh) = (t.w * f, t.h * f);
+        let mask: Vec<bool> = (0..fh)
+            .flat_map(|j| (0..fw).map(move |i| (i, j)))
+            .map(|(i, j)| split[((j / f) * t.w + i / f) as usize])
+            .collect();
+        let fine_opts = RenderOptions {
+            want_depth: false,
+            want_normals: false,
+            want_classify: false,
+            progress: false,
+            ..opts.clone()
+        };
+        let spec = TileSpec {
+            x0: t.x0 * f,
+            y0: t.y0 * f,
+            w: fw,
+            h: fh,
+            mask: Some(&mask),
+        };
+        downsample(render_tile(fine, &fine_opts, spec, bg), f)
+    });
+    if let Some(s) = &sub {
+        st.stats.merge(&s.state.stats);
+    }
+    aa::merge_split(
+        &mut px,
+        &split,
+        sub.as_ref()
+            .map(|s| (&s.linear[..], &s.coverage[..], &s.depth[..])),
+        f * f,
+        &mut st.stats,
+    );
+    st.stats.aa_cpu_ms += ms_since(t0);
+    t.state = st;
+}

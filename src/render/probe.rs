@@ -1,0 +1,247 @@
+//! The interval tests of a beam, shared by the tracer's blocks
+//! ([`super::beam`]) and anti-aliasing's pixel-area cells
+//! ([`super::aa`]): the scene function over a beam piece, the front-to-back
+//! rejection sweep, the search for the far end of an inclusion bracket,
+//! and the quartering of a block.
+
+use super::tracer::{TileState, Tracer};
+use crate::interval::Interval;
+use crate::interval::boxes::IBox;
+
+/// Floor of the pixel spacing a sweep's smallest piece is sized from, so
+/// that the sweep ends where the spacing vanishes (at the eye of a
+/// perspective camera).
+pub(crate) const MIN_SPACING: f64 = 1e-9;
+/// Where the inclusion test looks for a proven-negative cross-section past
+/// the first candidate piece: at these multiples of the piece's width.
+pub(crate) const INCLUSION_REACH: [f64; 3] = [1.0, 2.0, 4.0];
+/// Rejection pieces per sweep before the beam is declared undecided.
+const MAX_SWEEP_PIECES: usize = 256;
+
+// A half-open range of columns or rows.
+type Span = (u32, u32);
+
+/// A block of pixels (tile coordinates, half-open).
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub(crate) struct Rect {
+    /// First column.
+    pub x0: u32,
+    /// First row.
+    pub y0: u32,
+    /// Column past the last.
+    pub x1: u32,
+    /// Row past the last.
+    pub y1: u32,
+}
+
+impl Rect {
+    /// Whether the block is one pixel.
+    pub(crate) fn is_pixel(&self) -> bool {
+        self.x1 - self.x0 == 1 && self.y1 - self.y0 == 1
+    }
+
+    /// The pixels of the block, row by row.
+    pub(crate) fn pixels(&self) -> impl Iterator<Item = (u32, u32)> + use<> {
+        let Rect { x0, y0, x1, y1 } = *self;
+        (y0..y1).flat_map(move |j| (x0..x1).map(move |i| (i, j)))
+    }
+
+    // The two halves of each side (the first one the larger), as ranges.
+    fn halves(&self) -> ([Span; 2], [Span; 2]) {
+        let mx = (self.x0 + self.x1).div_ceil(2);
+        let my = (self.y0 + self.y1).div_ceil(2);
+        (
+            [(self.x0, mx), (mx, self.x1)],
+            [(self.y0, my), (my, self.y1)],
+        )
+    }
+
+    /// The non-empty quarters, left column first. The visiting order
+    /// matters beyond the counters: the mean-value policy learns as it
+    /// goes, so each caller keeps the order it was tuned with.
+    pub(crate) fn quarters_by_column(&self) -> impl Iterator<Item = Rect> + use<> {
+        let (xs, ys) = self.halves();
+        xs.into_iter()
+            .flat_map(move |(x0, x1)| ys.map(|(y0, y1)| Rect { x0, y0, x1, y1 }))
+            .filter(|r| r.x0 < r.x1 && r.y0 < r.y1)
+    }
+
+    /// The non-empty quarters, top row first (see
+    /// [`Rect::quarters_by_column`]).
+    pub(crate) fn quarters_by_row(&self) -> impl Iterator<Item = Rect> + use<> {
+        let (xs, ys) = self.halves();
+        ys.into_iter()
+            .flat_map(move |(y0, y1)| xs.map(|(x0, x1)| Rect { x0, y0, x1, y1 }))
+            .filter(|r| r.x0 < r.x1 && r.y0 < r.y1)
+    }
+}
+
+/// The width below which a sweep stops bisecting at parameter `t`: the
+/// footprint of a block `side` pixels across.
+pub(crate) fn min_width(tr: &Tracer<'_>, side: f64, t: f64) -> f64 {
+    side * tr.cam.spacing(t).max(MIN_SPACING)
+}
+
+/// How each object's interval over a beam piece is taken.
+#[derive(Copy, Clone, Debug)]
+pub(crate) enum Form {
+    /// The natural interval extension.
+    Natural,
+    /// Tightened by the mean-value form, for blocks of this size class
+    /// (see `Tracer::interval_tight`).
+    Tight(usize),
+}
+
+/// The scene function over the box `hb`: the minimum over the `live`
+/// objects, skipping those undefined on all of it (+inf when all are).
+pub(crate) fn scene_interval(
+    tr: &Tracer<'_>,
+    live: &[u32],
+    hb: IBox,
+    form: Form,
+    st: &mut TileState,
+) -> Interval {
+    let mut f = Interval::point(f64::INFINITY);
+    for &k in live {
+        let v = match form {
+            Form::Natural => tr.interval(k as usize, hb, &mut st.stats),
+            Form::Tight(level) => tr.interval_tight(k as usize, hb, level, st),
+        };
+        if !v.is_empty() {
+            f = f.min(v);
+        }
+    }
+    f
+}
+
+/// What the rejection sweep of a beam over its T range found.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub(crate) enum Sweep {
+    /// Every piece was proven free of surface: no ray of the beam hits.
+    Empty,
+    /// The scene is flat (constant along the rays, so bisecting T cannot
+    /// help) and one test over all of T did not reject it.
+    Flat,
+    /// The first piece, front to back, that could not be rejected.
+    Candidate(f64, f64),
+}
+
+/// The rejection sweep of a beam over `[t0, t1]`: drops every piece
+/// `excluded` proves free of surface, front to back (see
+/// [`first_candidate`]); a `flat` scene gets one test over the whole range.
+pub(crate) fn sweep(
+    flat: bool,
+    t0: f64,
+    t1: f64,
+    min_w: impl Fn(f64) -> f64,
+    mut excluded: impl FnMut(Interval) -> bool,
+) -> Sweep {
+    if flat {
+        return if excluded(Interval::new(t0, t1)) {
+            Sweep::Empty
+        } else {
+            Sweep::Flat
+        };
+    }
+    match first_candidate(t0, t1, min_w, excluded) {
+        Some((ta, tb)) => Sweep::Candidate(ta, tb),
+        None => Sweep::Empty,
+    }
+}
+
+/// The front-to-back rejection sweep over `[t0, t1]`: bisects nearest
+/// half first, drops every piece `excluded` proves free of surface, and
+/// returns the first piece it cannot drop once that piece is narrower than
+/// `min_w(start)` (or after [`MAX_SWEEP_PIECES`] pieces); `None` when the
+/// whole range is dropped.
+fn first_candidate(
+    t0: f64,
+    t1: f64,
+    min_w: impl Fn(f64) -> f64,
+    mut excluded: impl FnMut(Interval) -> bool,
+) -> Option<(f64, f64)> {
+    let mut stack = vec![(t0, t1)];
+    let mut pieces = 0usize;
+    while let Some((a, c)) = stack.pop() {
+        pieces += 1;
+        if excluded(Interval::new(a, c)) {
+            continue;
+        }
+        if c - a <= min_w(a) || pieces >= MAX_SWEEP_PIECES {
+            return Some((a, c));
+        }
+        let m = 0.5 * (a + c);
+        stack.push((m, c));
+        stack.push((a, m));
+    }
+    None
+}
+
+/// The far end of an inclusion bracket behind the candidate piece
+/// `[ta, tb]` (with `t1` the end of the beam's range): the scene function
+/// over the cross-section at `ta` (`cross(ta)`) must be strictly positive,
+/// and the first cross-section proven strictly negative at the
+/// [`INCLUSION_REACH`] multiples of the piece's width (at least
+/// `min_w(ta)`) past `ta` is the end. `None` when either fails.
+pub(crate) fn bracket_end(
+    (ta, tb): (f64, f64),
+    t1: f64,
+    min_w: impl Fn(f64) -> f64,
+    mut cross: impl FnMut(f64) -> Interval,
+) -> Option<f64> {
+    if cross(ta).lo <= 0.0 {
+        return None;
+    }
+    let w = (tb - ta).max(min_w(ta));
+    for mult in INCLUSION_REACH {
+        let tb2 = (ta + mult * w).min(t1);
+        if cross(tb2).hi < 0.0 {
+            return Some(tb2);
+        }
+        if tb2 >= t1 {
+            break;
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quarters_cover_the_block_once_in_either_order() {
+        let r = Rect {
+            x0: 0,
+            y0: 0,
+            x1: 3,
+            y1: 1,
+        };
+        let cols: Vec<Rect> = r.quarters_by_column().collect();
+        let rows: Vec<Rect> = r.quarters_by_row().collect();
+        assert_eq!(cols.len(), 2);
+        assert_eq!(cols, rows);
+        let n: usize = cols.iter().map(|q| q.pixels().count()).sum();
+        assert_eq!(n, 3);
+        let sq = Rect {
+            x0: 0,
+            y0: 0,
+            x1: 2,
+            y1: 2,
+        };
+        let first = |v: Vec<Rect>| (v[1].x0, v[1].y0);
+        assert_eq!(first(sq.quarters_by_column().collect()), (0, 1));
+        assert_eq!(first(sq.quarters_by_row().collect()), (1, 0));
+    }
+
+    #[test]
+    fn the_sweep_finds_the_first_piece_with_surface() {
+        let s = sweep(false, 0.0, 8.0, |_| 0.5, |t| t.hi < 3.0 || t.lo > 3.5);
+        let Sweep::Candidate(a, b) = s else {
+            panic!("{s:?}")
+        };
+        assert!(a <= 3.0 && b >= 3.0 && b - a <= 0.5, "{a} {b}");
+        assert_eq!(sweep(false, 0.0, 8.0, |_| 0.5, |_| true), Sweep::Empty);
+        assert_eq!(sweep(true, 0.0, 8.0, |_| 0.5, |_| false), Sweep::Flat);
+    }
+}

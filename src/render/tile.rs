@@ -1,0 +1,305 @@
+//! One tile: visibility (beams, or one ray per pixel for the baselines),
+//! then surfaces, shadow beams over included blocks, and shading.
+
+use std::time::Instant;
+
+use image::Rgb;
+
+use super::beam::{self, TileRays};
+use super::camera::{self, PixelRay};
+use super::shade::{self, Surf};
+use super::tracer::{PrunedEvals, TileState, Tracer};
+use super::{Class, Method, RenderOptions, output, ray};
+use crate::interval::Interval;
+
+/// Which pixels of the traced image a tile covers.
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct TileSpec<'m> {
+    /// Left column.
+    pub x0: u32,
+    /// Top row.
+    pub y0: u32,
+    /// Width in pixels.
+    pub w: u32,
+    /// Height in pixels.
+    pub h: u32,
+    /// Row-major: the pixels to trace (None: all of them).
+    pub mask: Option<&'m [bool]>,
+}
+
+/// What tracing a tile produces, row-major within the tile.
+pub(crate) struct TileOut {
+    /// Left column.
+    pub x0: u32,
+    /// Top row.
+    pub y0: u32,
+    /// Width in pixels.
+    pub w: u32,
+    /// Height in pixels.
+    pub h: u32,
+    /// Linear colour.
+    pub linear: Vec<[f64; 3]>,
+    /// Lights shadowed at each sample (bit per light; see `shade::shade`).
+    pub shadowed: Vec<u64>,
+    /// Fraction of the pixel whose samples hit.
+    pub coverage: Vec<f64>,
+    /// Samples taken per pixel.
+    pub samples: Vec<u32>,
+    /// Ray parameter of the hit, +inf for none; kept compact: a full-size
+    /// render holds every tile at once.
+    pub depth: Vec<f64>,
+    /// Normal image pixels, if asked for.
+    pub normals: Option<Vec<Rgb<u8>>>,
+    /// Classification image pixels, if asked for.
+    pub class: Option<Vec<Rgb<u8>>>,
+    /// Counters and the mean-value record, which anti-aliasing carries on.
+    pub state: TileState,
+}
+
+/// Milliseconds since `t`.
+pub(crate) fn ms_since(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+/// Traces and shades one tile of `tr`'s image.
+pub(crate) fn render_tile(
+    tr: &Tracer<'_>,
+    opts: &RenderOptions,
+    spec: TileSpec<'_>,
+    background: [f64; 3],
+) -> TileOut {
+    let mut st = TileState::default();
+    let t_trace = Instant::now();
+    let n = (spec.w * spec.h) as usize;
+    let mut tile = tile_rays(tr, &spec);
+    // Visibility inside the tile's beam runs on functions pruned to it;
+    // shading and shadows, whose segments leave the beam, keep `tr`.
+    let pruned = prune_to_tile(tr, &tile, spec.h, &mut st);
+    let local;
+    let tr_vis = match &pruned {
+        Some((evals, live)) => {
+            local = tr.with_evals(evals, live.clone());
+            &local
+        }
+        None => tr,
+    };
+    visibility(tr_vis, opts.method, &mut tile, spec.h, &mut st);
+    st.stats.trace_cpu_ms += ms_since(t_trace);
+
+    // Hit points lie in the tile's beam: their normals may come from the
+    // pruned functions too (the same bits).
+    let t_shade = Instant::now();
+    let surfs: Vec<Option<Surf>> = (0..n)
+        .map(|k| {
+            tile.hits[k]
+                .as_ref()
+                .map(|h| shade::surface(tr_vis, &tile.rays[k], h, &mut st.stats))
+        })
+        .collect();
+    st.stats.shade_cpu_ms += ms_since(t_shade);
+
+    let lit_by_beam = shadow_beams(tr, &tile, &surfs, &mut st);
+    let lit = shade_pixels(tr, &surfs, &lit_by_beam, background, opts, &mut st);
+    TileOut {
+        x0: spec.x0,
+        y0: spec.y0,
+        w: spec.w,
+        h: spec.h,
+        coverage: tile
+            .hits
+            .iter()
+            .map(|h| if h.is_some() { 1.0 } else { 0.0 })
+            .collect(),
+        linear: lit.linear,
+        shadowed: lit.shadowed,
+        samples: vec![1; n],
+        depth: tile
+            .hits
+            .iter()
+            .map(|h| h.map_or(f64::INFINITY, |h| h.t))
+            .collect(),
+        normals: lit.normals,
+        class: opts
+            .want_classify
+            .then(|| tile.class.iter().map(|&c| class_color(c)).collect()),
+        state: st,
+    }
+}
+
+// The tile's pixel rays and their ranges inside the bounds, nothing traced.
+fn tile_rays(tr: &Tracer<'_>, spec: &TileSpec<'_>) -> TileRays {
+    let n = (spec.w * spec.h) as usize;
+    let mut rays: Vec<PixelRay> = Vec::with_capacity(n);
+    let mut slabs = Vec::with_capacity(n);
+    for j in 0..spec.h {
+        for i in 0..spec.w {
+            let r = tr.cam.pixel_ray(spec.x0 + i, spec.y0 + j);
+            // Masked-out samples look like rays outside the bounds: beams
+            // over them are rejected at once.
+            let on = spec.mask.is_none_or(|m| m[(j * spec.w + i) as usize]);
+            slabs.push(if on { r.slab(&tr.bounds) } else { None });
+            rays.push(r);
+        }
+    }
+    TileRays {
+        x0: spec.x0,
+        y0: spec.y0,
+        w: spec.w,
+        rays,
+        slabs,
+        hits: vec![None; n],
+        class: vec![Class::Outside; n],
+        included: Vec::new(),
+    }
+}
+
+/// Evaluators pruned to the tile's beam: the rays through its pixel
+/// centres over their clipped T ranges.
+fn prune_to_tile(
+    tr: &Tracer<'_>,
+    tile: &TileRays,
+    th: u32,
+    st: &mut TileState,
+) -> Option<PrunedEvals> {
+    let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
+    for &(a, c) in tile.slabs.iter().flatten() {
+        t0 = t0.min(a);
+        t1 = t1.max(c);
+    }
+    if t0.partial_cmp(&t1).is_none_or(|o| o.is_gt()) {
+        return None;
+    }
+    let xs = (f64::from(tile.x0) + 0.5, f64::from(tile.x0 + tile.w) - 0.5);
+    let ys = (f64::from(tile.y0) + 0.5, f64::from(tile.y0 + th) - 0.5);
+    let region = tr.beam_region(xs, ys, Interval::new(t0, t1))?;
+    tr.pruned_to(region, &mut st.stats)
+}
+
+// Finds every pixel's first hit with `method`.
+fn visibility(tr: &Tracer<'_>, method: Method, tile: &mut TileRays, th: u32, st: &mut TileState) {
+    let n = tile.rays.len();
+    match method {
+        Method::Beam => beam::trace_tile(tr, tile, th, st),
+        Method::Pixel | Method::Point { .. } => {
+            let all: Vec<u32> = (0..tr.evals.len() as u32).collect();
+            let st = &mut st.stats;
+            for k in 0..n {
+                if let Some((a, b)) = tile.slabs[k] {
+                    let r = tile.rays[k];
+                    tile.hits[k] = match method {
+                        Method::Point { steps } => ray::march(tr, &r, a, b, &all, steps, st),
+                        _ => ray::trace_ray(tr, &r, a, b, &all, st),
+                    };
+                    tile.class[k] = Class::Ray;
+                }
+            }
+        }
+    }
+    for k in 0..n {
+        if tile.slabs[k].is_none() {
+            tile.class[k] = Class::Outside;
+        }
+    }
+}
+
+// Shadow beams over the included blocks: row-major per pixel and light,
+// whether one beam proved the pixel lit.
+fn shadow_beams(
+    tr: &Tracer<'_>,
+    tile: &TileRays,
+    surfs: &[Option<Surf>],
+    st: &mut TileState,
+) -> Vec<bool> {
+    let t_shadow = Instant::now();
+    let st = &mut st.stats;
+    let nl = tr.lights.len();
+    let mut lit_by_beam = vec![false; surfs.len() * nl];
+    for b in &tile.included {
+        for (li, light) in tr.lights.iter().enumerate() {
+            if !light.shadows {
+                continue;
+            }
+            let mut members = Vec::new();
+            let mut pts = Vec::new();
+            for (i, j) in b.pixels() {
+                let k = (j * tile.w + i) as usize;
+                let Some(s) = surfs[k] else { continue };
+                let facing = shade::light_dir(tr, light.kind, s.p)
+                    .is_some_and(|(l, _)| camera::dot(s.n, l) > 0.0);
+                if facing {
+                    members.push(k);
+                    pts.push(s);
+                }
+            }
+            if members.len() < 2 {
+                continue;
+            }
+            st.shadow_beams += 1;
+            if shade::shadow_beam(tr, &pts, light.kind, st) {
+                st.shadow_beams_ok += 1;
+                st.shadow_rays_saved += members.len() as u64;
+                for k in members {
+                    lit_by_beam[k * nl + li] = true;
+                }
+            }
+        }
+    }
+    st.shadow_cpu_ms += ms_since(t_shadow);
+    lit_by_beam
+}
+
+// The shaded pixels of a tile.
+struct Lit {
+    linear: Vec<[f64; 3]>,
+    shadowed: Vec<u64>,
+    normals: Option<Vec<Rgb<u8>>>,
+}
+
+// Lights every hit (the background elsewhere), with per-pixel shadow
+// segments for the lights no shadow beam settled.
+fn shade_pixels(
+    tr: &Tracer<'_>,
+    surfs: &[Option<Surf>],
+    lit_by_beam: &[bool],
+    background: [f64; 3],
+    opts: &RenderOptions,
+    st: &mut TileState,
+) -> Lit {
+    let t_shade = Instant::now();
+    let st = &mut st.stats;
+    let (n, nl) = (surfs.len(), tr.lights.len());
+    let mut linear = vec![background; n];
+    let mut shadowed = vec![0u64; n];
+    let mut normals = opts.want_normals.then(|| vec![Rgb([0u8; 3]); n]);
+    let mut shadow_ms = 0.0;
+    for k in 0..n {
+        if let Some(s) = &surfs[k] {
+            let t0 = Instant::now();
+            let (c, sh) = shade::shade(tr, s, &lit_by_beam[k * nl..(k + 1) * nl], st);
+            shadow_ms += ms_since(t0);
+            linear[k] = c;
+            shadowed[k] = sh;
+            if let Some(nv) = normals.as_mut() {
+                nv[k] = output::normal_pixel(Some(s.n));
+            }
+        }
+    }
+    // Per-pixel lighting time is dominated by shadow segments.
+    st.shadow_cpu_ms += shadow_ms;
+    st.shade_cpu_ms += (ms_since(t_shade) - shadow_ms).max(0.0);
+    Lit {
+        linear,
+        shadowed,
+        normals,
+    }
+}
+
+/// The classification map's colour of a pixel.
+fn class_color(c: Class) -> Rgb<u8> {
+    match c {
+        Class::Outside => Rgb([0, 0, 0]),
+        Class::Background => Rgb([30, 50, 140]),
+        Class::Included => Rgb([40, 180, 70]),
+        Class::Ray => Rgb([210, 60, 40]),
+    }
+}
