@@ -7,6 +7,7 @@ pub mod build;
 pub mod interp;
 pub mod jit;
 pub mod regional;
+pub mod tape;
 
 pub use crate::ir::semantics::{Grad, IntervalGrad};
 pub use build::{EvalKind, build_evaluator, build_evaluators};

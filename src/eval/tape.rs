@@ -1,0 +1,515 @@
+//! Tapes: a function's live ops in evaluation order with registers
+//! assigned, evaluated over many points or boxes per pass, and pruned to a
+//! region in two passes without rebuilding a [`Function`] (after Fidget).
+//!
+//! A [`Tape`] keeps two views of the same ops:
+//! - `ssa`: the ops as a [`Function`] whose root is its last op, which the
+//!   IR's printer and validator understand and pruning reads;
+//! - `code`: one [`Instr`] per op, reading and writing registers. A value
+//!   holds its register from its definition to its last use, so a tape
+//!   needs as many registers as values are alive at once (a few dozen for
+//!   a CSG tree of thousands of ops), and batch evaluation keeps one
+//!   column of the batch per register, not per op.
+//!
+//! Batch evaluation runs the loop over the batch inside each op, so that
+//! each op's loop is a tight pass over contiguous memory the compiler can
+//! vectorise. Every value is the same bits as the reference interpreter's
+//! (both call the rules of [`crate::ir::semantics`]).
+//!
+//! [`Tape::prune`] evaluates the tape's intervals over a box once,
+//! recording for each `min`/`max` whether one operand always wins there
+//! (the rules of [`crate::ir::prune`], so the pruned tape gives the same
+//! bits at every point of the box), then one backward pass writes the
+//! child tape: it keeps only what the root still reads through the
+//! decided nodes and assigns registers as it goes (a value's register is
+//! taken at its last use, met first when walking backwards, and freed at
+//! its definition). A child prunes further to a smaller box from its own
+//! tape, never from the whole function.
+
+use crate::interval::Interval;
+use crate::ir::prune::{Facts, decided_operand, facts};
+use crate::ir::semantics::{
+    interval_binary, interval_unary, point_binary, point_powi, point_unary,
+};
+use crate::ir::{BinaryOp, Function, Op, UnaryOp, ValueId, Var};
+
+/// A register index.
+pub type Reg = u32;
+
+/// One instruction: an op over registers.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub enum Instr {
+    /// `out = var`.
+    Var(Reg, Var),
+    /// `out = c`.
+    Const(Reg, f64),
+    /// `out = op(a)`.
+    Unary(Reg, UnaryOp, Reg),
+    /// `out = op(a, b)`.
+    Binary(Reg, BinaryOp, Reg, Reg),
+    /// `out = a^n`.
+    Powi(Reg, Reg, i32),
+}
+
+impl Instr {
+    /// The register it writes.
+    pub fn out(&self) -> Reg {
+        match *self {
+            Instr::Var(o, _)
+            | Instr::Const(o, _)
+            | Instr::Unary(o, ..)
+            | Instr::Binary(o, ..)
+            | Instr::Powi(o, ..) => o,
+        }
+    }
+}
+
+/// A register-allocated evaluation tape (see the module doc).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Tape {
+    ssa: Function,
+    code: Vec<Instr>,
+    registers: usize,
+}
+
+/// Per-thread scratch space for batch evaluation: one column of the batch
+/// per register, reused across calls.
+#[derive(Default, Debug)]
+pub struct Workspace {
+    points: Vec<f64>,
+    intervals: Vec<Interval>,
+}
+
+/// The result of [`Tape::prune`].
+#[derive(Clone, Debug)]
+pub struct PrunedTape {
+    /// The tape restricted to the box.
+    pub tape: Tape,
+    /// How many `min`/`max` nodes were decided.
+    pub decided: usize,
+}
+
+impl Tape {
+    /// The tape of `f`'s live ops, scheduled depth first from the root:
+    /// each op comes just before the first op that reads it, so a tree of
+    /// n ops needs registers for about its depth, not its width (lowering
+    /// and the balancing pass put all the leaves of a long `min` first).
+    pub fn new(f: &Function) -> Tape {
+        let order = depth_first(f);
+        let mut index = vec![ValueId(0); f.ops.len()];
+        let mut ops = Vec::with_capacity(order.len());
+        for &i in &order {
+            index[i] = ValueId(ops.len() as u32);
+            ops.push(f.ops[i].map_operands(|a| index[a.index()]));
+        }
+        let root = index[f.root.index()];
+        let parents: Vec<usize> = (0..ops.len()).collect();
+        let ssa = Function { ops, root };
+        let keep = vec![true; ssa.ops.len()];
+        Tape::write_child(&ssa, &parents, &keep)
+    }
+
+    /// The ops as a function (its root is the last op).
+    pub fn function(&self) -> &Function {
+        &self.ssa
+    }
+
+    /// The instructions, one per op of [`Tape::function`].
+    pub fn code(&self) -> &[Instr] {
+        &self.code
+    }
+
+    /// Number of ops.
+    pub fn len(&self) -> usize {
+        self.code.len()
+    }
+
+    /// Whether the tape has no op (never true: a tape has a root).
+    pub fn is_empty(&self) -> bool {
+        self.code.is_empty()
+    }
+
+    /// Registers the tape needs.
+    pub fn registers(&self) -> usize {
+        self.registers
+    }
+
+    fn root_reg(&self) -> usize {
+        self.code.last().map_or(0, |i| i.out() as usize)
+    }
+
+    /// `out[i] = f(xs[i], ys[i], zs[i])`, the same bits as the reference
+    /// interpreter.
+    pub fn point_batch(&self, [xs, ys, zs]: [&[f64]; 3], out: &mut [f64], ws: &mut Workspace) {
+        let n = out.len();
+        assert!(xs.len() == n && ys.len() == n && zs.len() == n);
+        let m = &mut ws.points;
+        m.clear();
+        m.resize(self.registers * n, 0.0);
+        for instr in &self.code {
+            let col = |r: Reg| r as usize * n;
+            match *instr {
+                Instr::Var(o, v) => {
+                    let src = [xs, ys, zs][v.index()];
+                    m[col(o)..col(o) + n].copy_from_slice(src);
+                }
+                Instr::Const(o, c) => m[col(o)..col(o) + n].fill(c),
+                Instr::Unary(o, op, a) => {
+                    let (o, a) = (col(o), col(a));
+                    for i in 0..n {
+                        m[o + i] = point_unary(op, m[a + i]);
+                    }
+                }
+                Instr::Binary(o, op, a, b) => point_binary_column(m, op, n, [o, a, b].map(col)),
+                Instr::Powi(o, a, k) => {
+                    let (o, a) = (col(o), col(a));
+                    for i in 0..n {
+                        m[o + i] = point_powi(m[a + i], k);
+                    }
+                }
+            }
+        }
+        let r = self.root_reg() * n;
+        out.copy_from_slice(&m[r..r + n]);
+    }
+
+    /// `out[i]` contains f over `boxes[i]`, the same bits as the reference
+    /// interpreter's interval.
+    pub fn interval_batch(
+        &self,
+        boxes: &[[Interval; 3]],
+        out: &mut [Interval],
+        ws: &mut Workspace,
+    ) {
+        let n = out.len();
+        assert_eq!(boxes.len(), n);
+        let m = &mut ws.intervals;
+        m.clear();
+        m.resize(self.registers * n, Interval::point(0.0));
+        for instr in &self.code {
+            let col = |r: Reg| r as usize * n;
+            match *instr {
+                Instr::Var(o, v) => {
+                    for (i, b) in boxes.iter().enumerate() {
+                        m[col(o) + i] = b[v.index()];
+                    }
+                }
+                Instr::Const(o, c) => m[col(o)..col(o) + n].fill(Interval::point(c)),
+                Instr::Unary(o, op, a) => {
+                    let (o, a) = (col(o), col(a));
+                    for i in 0..n {
+                        m[o + i] = interval_unary(op, m[a + i]);
+                    }
+                }
+                Instr::Binary(o, op, a, b) => {
+                    let (o, a, b) = (col(o), col(a), col(b));
+                    for i in 0..n {
+                        m[o + i] = interval_binary(op, m[a + i], m[b + i]);
+                    }
+                }
+                Instr::Powi(o, a, k) => {
+                    let (o, a) = (col(o), col(a));
+                    for i in 0..n {
+                        m[o + i] = m[a + i].powi(k);
+                    }
+                }
+            }
+        }
+        let r = self.root_reg() * n;
+        out.copy_from_slice(&m[r..r + n]);
+    }
+
+    /// The tape restricted to the box `b`: `None` when no `min`/`max` is
+    /// decided there (see the module doc and [`crate::ir::prune`]).
+    pub fn prune(&self, b: [Interval; 3], ws: &mut Workspace) -> Option<PrunedTape> {
+        let ops = &self.ssa.ops;
+        let regs = &mut ws.intervals;
+        regs.clear();
+        regs.resize(self.registers, Interval::point(0.0));
+        let mut value = vec![Interval::point(0.0); ops.len()];
+        let mut fact = vec![Facts::default(); ops.len()];
+        // alias[k]: the op whose value op k always equals on the box.
+        let mut alias: Vec<usize> = (0..ops.len()).collect();
+        let mut decided = 0;
+        for (k, (op, instr)) in ops.iter().zip(&self.code).enumerate() {
+            let v = match *instr {
+                Instr::Var(_, var) => b[var.index()],
+                Instr::Const(_, c) => Interval::point(c),
+                Instr::Unary(_, u, a) => interval_unary(u, regs[a as usize]),
+                Instr::Binary(_, o, x, y) => interval_binary(o, regs[x as usize], regs[y as usize]),
+                Instr::Powi(_, a, n) => regs[a as usize].powi(n),
+            };
+            regs[instr.out() as usize] = v;
+            let arg = |a: ValueId| (value[a.index()], fact[a.index()]);
+            if let Op::Binary(o, x, y) = *op
+                && let Some(w) = decided_operand(o, arg(x), arg(y))
+            {
+                alias[k] = alias[[x, y][w].index()];
+                decided += 1;
+            }
+            fact[k] = facts(op, v, arg);
+            value[k] = v;
+        }
+        if decided == 0 {
+            return None;
+        }
+        let keep: Vec<bool> = (0..ops.len()).map(|k| alias[k] == k).collect();
+        Some(PrunedTape {
+            tape: Tape::write_child(&self.ssa, &alias, &keep),
+            decided,
+        })
+    }
+
+    /// The one backward pass that writes a tape: from `parent`'s root
+    /// (through `alias`), keeps the ops the root reads among those marked
+    /// `keep`, reading each operand through `alias`, and assigns registers.
+    fn write_child(parent: &Function, alias: &[usize], keep: &[bool]) -> Tape {
+        let n = parent.ops.len();
+        let root = alias[parent.root.index()];
+        let mut live = vec![false; n];
+        live[root] = true;
+        let mut reg: Vec<Option<Reg>> = vec![None; n];
+        let mut free: Vec<Reg> = Vec::new();
+        let mut registers: Reg = 0;
+        let mut take = |free: &mut Vec<Reg>| {
+            free.pop().unwrap_or_else(|| {
+                registers += 1;
+                registers - 1
+            })
+        };
+        reg[root] = Some(take(&mut free));
+        // Written back to front: (parent index, op over parent indices,
+        // instruction).
+        let mut rev: Vec<(usize, Op, Instr)> = Vec::new();
+        for k in (0..n).rev() {
+            if !live[k] || !keep[k] {
+                continue;
+            }
+            let op = parent.ops[k].map_operands(|a| ValueId(alias[a.index()] as u32));
+            let out = reg[k].expect("a live value has its register from its last use");
+            // Before its definition the value is not alive.
+            free.push(out);
+            for a in op.operands() {
+                let a = a.index();
+                live[a] = true;
+                if reg[a].is_none() {
+                    reg[a] = Some(take(&mut free));
+                }
+            }
+            let r = |a: ValueId| reg[a.index()].expect("operand register taken above");
+            let instr = match op {
+                Op::Var(v) => Instr::Var(out, v),
+                Op::Const(c) => Instr::Const(out, c),
+                Op::Unary(u, a) => Instr::Unary(out, u, r(a)),
+                Op::Binary(o, a, b) => Instr::Binary(out, o, r(a), r(b)),
+                Op::Powi(a, p) => Instr::Powi(out, r(a), p),
+            };
+            rev.push((k, op, instr));
+        }
+        let mut index = vec![ValueId(0); n];
+        let mut ops = Vec::with_capacity(rev.len());
+        let mut code = Vec::with_capacity(rev.len());
+        for (k, op, instr) in rev.into_iter().rev() {
+            index[k] = ValueId(ops.len() as u32);
+            ops.push(op.map_operands(|a| index[a.index()]));
+            code.push(instr);
+        }
+        let root = index[root];
+        Tape {
+            ssa: Function { ops, root },
+            code,
+            registers: registers as usize,
+        }
+    }
+}
+
+/// The ops the root of `f` reads, in depth-first post-order (operands
+/// left to right before the op; an explicit stack, as functions may be
+/// millions of ops deep).
+fn depth_first(f: &Function) -> Vec<usize> {
+    let mut placed = vec![false; f.ops.len()];
+    let mut order = Vec::new();
+    // (op, whether its operands were pushed already)
+    let mut stack = vec![(f.root.index(), false)];
+    while let Some((i, expanded)) = stack.pop() {
+        if placed[i] {
+            continue;
+        }
+        if expanded {
+            placed[i] = true;
+            order.push(i);
+            continue;
+        }
+        stack.push((i, true));
+        let args: Vec<usize> = f.ops[i].operands().map(|a| a.index()).collect();
+        for &a in args.iter().rev() {
+            if !placed[a] {
+                stack.push((a, false));
+            }
+        }
+    }
+    order
+}
+
+/// One binary op over a column of points: the common ops as plain loops the
+/// compiler vectorises, the rest through the reference rule.
+fn point_binary_column(m: &mut [f64], op: BinaryOp, n: usize, [o, a, b]: [usize; 3]) {
+    match op {
+        BinaryOp::Add => (0..n).for_each(|i| m[o + i] = m[a + i] + m[b + i]),
+        BinaryOp::Sub => (0..n).for_each(|i| m[o + i] = m[a + i] - m[b + i]),
+        BinaryOp::Mul => (0..n).for_each(|i| m[o + i] = m[a + i] * m[b + i]),
+        _ => (0..n).for_each(|i| m[o + i] = point_binary(op, m[a + i], m[b + i])),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::eval::Evaluator;
+    use crate::eval::interp::Interpreter;
+    use crate::ir::passes::simplify;
+    use crate::ir::random::{Rng, random_function};
+
+    fn same(a: f64, b: f64) -> bool {
+        a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
+    }
+
+    fn same_iv(a: Interval, b: Interval) -> bool {
+        (a.is_empty() && b.is_empty()) || (same(a.lo, b.lo) && same(a.hi, b.hi))
+    }
+
+    fn random_box(rng: &mut Rng, s: f64) -> [Interval; 3] {
+        std::array::from_fn(|_| {
+            let (a, b) = (rng.range(-s, s), rng.range(-s, s));
+            Interval::new(a.min(b), a.max(b))
+        })
+    }
+
+    #[test]
+    fn batches_give_the_interpreters_bits() {
+        let mut rng = Rng::new(7);
+        let mut ws = Workspace::default();
+        for seed in 0..300 {
+            let f = random_function(seed, 8);
+            let tape = Tape::new(&f);
+            crate::ir::validate::validate(tape.function()).unwrap();
+            let it = Interpreter::new(f);
+            let pts: Vec<[f64; 3]> = (0..17)
+                .map(|_| std::array::from_fn(|_| rng.range(-3.0, 3.0)))
+                .collect();
+            let cols: [Vec<f64>; 3] = std::array::from_fn(|c| pts.iter().map(|p| p[c]).collect());
+            let mut out = vec![0.0; pts.len()];
+            tape.point_batch([&cols[0], &cols[1], &cols[2]], &mut out, &mut ws);
+            for (p, v) in pts.iter().zip(&out) {
+                assert!(same(*v, it.point(*p)), "seed {seed} at {p:?}");
+            }
+            let boxes: Vec<_> = (0..9).map(|_| random_box(&mut rng, 3.0)).collect();
+            let mut iv = vec![Interval::point(0.0); boxes.len()];
+            tape.interval_batch(&boxes, &mut iv, &mut ws);
+            for (b, v) in boxes.iter().zip(&iv) {
+                assert!(same_iv(*v, it.interval(*b)), "seed {seed} over {b:?}");
+            }
+        }
+    }
+
+    /// A union of `n` spheres along x: a min chain, balanced by simplify.
+    fn spheres(n: usize) -> Function {
+        let mut b = crate::ir::Builder::new();
+        let x = b.var(Var::X);
+        let y = b.var(Var::Y);
+        let z = b.var(Var::Z);
+        let yz = {
+            let y2 = b.unary(UnaryOp::Square, y);
+            let z2 = b.unary(UnaryOp::Square, z);
+            b.binary(BinaryOp::Add, y2, z2)
+        };
+        let mut acc = None;
+        for i in 0..n {
+            let c = b.constant(i as f64);
+            let dx = b.binary(BinaryOp::Sub, x, c);
+            let dx2 = b.unary(UnaryOp::Square, dx);
+            let r2 = b.binary(BinaryOp::Add, dx2, yz);
+            let r = b.unary(UnaryOp::Sqrt, r2);
+            let half = b.constant(0.5);
+            let s = b.binary(BinaryOp::Sub, r, half);
+            acc = Some(match acc {
+                None => s,
+                Some(a) => b.binary(BinaryOp::Min, a, s),
+            });
+        }
+        simplify(&b.finish(acc.unwrap()))
+    }
+
+    #[test]
+    fn pruning_keeps_the_bits_inside_and_nests() {
+        let f = spheres(200);
+        let whole = Tape::new(&f);
+        assert!(whole.registers() < 40, "{} registers", whole.registers());
+        let mut ws = Workspace::default();
+        let outer = [
+            Interval::new(40.2, 47.8),
+            Interval::new(-1.0, 1.0),
+            Interval::new(-1.0, 1.0),
+        ];
+        let p1 = whole
+            .prune(outer, &mut ws)
+            .expect("a small box decides most mins");
+        assert!(
+            p1.tape.len() * 5 < whole.len(),
+            "{} of {}",
+            p1.tape.len(),
+            whole.len()
+        );
+        crate::ir::validate::validate(p1.tape.function()).unwrap();
+        let inner = [
+            Interval::new(44.6, 45.3),
+            Interval::new(-0.2, 0.3),
+            Interval::new(0.0, 0.1),
+        ];
+        let p2 = p1
+            .tape
+            .prune(inner, &mut ws)
+            .expect("nested pruning decides more");
+        assert!(p2.tape.len() < p1.tape.len());
+        let direct = crate::ir::prune::prune(&f, outer).unwrap();
+        assert_eq!(direct.decided, p1.decided);
+        let it = Interpreter::new(f.clone());
+        let mut rng = Rng::new(3);
+        for (tape, bx) in [(&p1.tape, outer), (&p2.tape, inner)] {
+            let pts: Vec<[f64; 3]> = (0..64)
+                .map(|_| std::array::from_fn(|c| rng.range(bx[c].lo, bx[c].hi)))
+                .collect();
+            let cols: [Vec<f64>; 3] = std::array::from_fn(|c| pts.iter().map(|p| p[c]).collect());
+            let mut out = vec![0.0; pts.len()];
+            tape.point_batch([&cols[0], &cols[1], &cols[2]], &mut out, &mut ws);
+            for (p, v) in pts.iter().zip(&out) {
+                assert!(same(*v, it.point(*p)), "at {p:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn pruned_random_functions_keep_their_bits_in_the_box() {
+        let mut rng = Rng::new(11);
+        let mut ws = Workspace::default();
+        let mut pruned = 0;
+        for seed in 0..400 {
+            let f = random_function(seed, 9);
+            let tape = Tape::new(&f);
+            let bx = random_box(&mut rng, 2.0);
+            let Some(p) = tape.prune(bx, &mut ws) else {
+                continue;
+            };
+            pruned += 1;
+            let it = Interpreter::new(f);
+            for _ in 0..16 {
+                let q: [f64; 3] = std::array::from_fn(|c| rng.range(bx[c].lo, bx[c].hi));
+                let mut out = [0.0];
+                p.tape
+                    .point_batch([&[q[0]], &[q[1]], &[q[2]]], &mut out, &mut ws);
+                assert!(same(out[0], it.point(q)), "seed {seed} at {q:?}");
+            }
+        }
+        assert!(pruned > 20, "only {pruned} random functions pruned");
+    }
+}
