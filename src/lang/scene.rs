@@ -5,7 +5,8 @@
 use super::ast::{Expr, Ident, Item, Prop, PropValue, Span};
 use super::diag::Diag;
 use crate::ir::Function;
-use crate::lang::lower::{Program, depends_on_coords, suggest};
+use crate::lang::diag::suggest;
+use crate::lang::lower::{Program, depends_on_coords};
 use crate::scene::{Bounds, Camera, Light, LightKind, Object, Projection, RenderSettings, Scene};
 
 /// The colour of an object without a `color` property.

@@ -108,7 +108,7 @@ pub fn parse_vm(text: &str, src: usize) -> Result<Function, Diag> {
         };
         let op = vm_op(op_word.1).ok_or_else(|| {
             let d = Diag::new(src, span(op_word), format!("unknown op `{}`", op_word.1));
-            match crate::lang::lower::suggest(op_word.1, OPS.iter().map(|(n, _)| *n)) {
+            match crate::lang::diag::suggest(op_word.1, OPS.iter().map(|(n, _)| *n)) {
                 Some(s) => d.with_help(format!("did you mean `{s}`?")),
                 None => d.with_help("supported ops: var-x var-y var-z const neg abs recip sqrt square exp ln sin cos add sub mul div min max atan2"),
             }
