@@ -45,7 +45,9 @@ pub struct RenderArgs {
     #[arg(long, value_delimiter = ',', default_values_t = [512u32, 1024])]
     pub sizes: Vec<u32>,
     /// Methods to compare.
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [MethodArg::Beam, MethodArg::Pixel, MethodArg::Point])]
+    // Possible values hidden: `--help` reads as it did when this was a
+    // list of strings (`ibeam render --help` describes each method).
+    #[arg(long, value_enum, value_delimiter = ',', hide_possible_values = true, default_values_t = [MethodArg::Beam, MethodArg::Pixel, MethodArg::Point])]
     pub methods: Vec<MethodArg>,
     /// Steps along each ray for the point-sampling method.
     #[arg(long, default_value_t = 256)]
