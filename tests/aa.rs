@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use ibeam::bench::accuracy::{CSV_HEADER, default_variants, run_accuracy, sweep_scene};
+use ibeam::bench::accuracy::{CSV_HEADER, Family, default_variants, run_accuracy, sweep_scene};
 use ibeam::eval::Evaluator;
 use ibeam::eval::interp::Interpreter;
 use ibeam::ir::passes::simplify;
@@ -217,7 +217,7 @@ fn accuracy_sweep_writes_its_files_and_obeys_the_obvious_relations() {
     let png = image::open(dir.join("accuracy.png")).unwrap();
     assert!(png.width() >= 400 && png.height() >= 300);
     let reference = &rows[0];
-    assert_eq!(reference.family, "reference");
+    assert_eq!(reference.family, Family::Reference);
     assert_eq!(reference.rmse, 0.0);
     assert_eq!(reference.max_abs, 0.0);
     assert_eq!(reference.coverage_diff_pct, 0.0);
@@ -226,17 +226,17 @@ fn accuracy_sweep_writes_its_files_and_obeys_the_obvious_relations() {
     for r in &rows[1..] {
         assert!(r.rmse.is_finite() && r.rmse >= 0.0 && r.rmse <= r.max_abs + 1e-12);
         assert!(r.time_ms > 0.0);
-        if r.family != "point" {
+        if r.family != Family::Point {
             assert_eq!(r.missed_surface, 0, "{} {}", r.family, r.param);
         }
     }
     assert!(rows[1..].iter().any(|r| r.pareto));
     // The beam and pixel methods draw the same pixels (their colours
     // differ within the depth tolerance).
-    let fam = |f: &str| rows.iter().find(|r| r.family == f).unwrap();
+    let fam = |f: Family| rows.iter().find(|r| r.family == f).unwrap();
     assert_eq!(
-        fam("beam").coverage_diff_pct,
-        fam("pixel").coverage_diff_pct
+        fam(Family::Beam).coverage_diff_pct,
+        fam(Family::Pixel).coverage_diff_pct
     );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -22,10 +22,9 @@
 
 use std::fmt;
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
 
-use plotters::prelude::*;
-
+use super::plot::plot;
 use crate::eval::Evaluator;
 use crate::render::{Aa, Method, RenderError, RenderOptions, RenderOutput, render_aa};
 use crate::scene::Scene;
@@ -39,11 +38,50 @@ pub const COVERAGE_TOLERANCE: f64 = 1.0 / 8.0;
 /// Builds one evaluator per scene object.
 pub type MakeEvaluators<'a> = &'a dyn Fn(&Scene) -> Result<Vec<Arc<dyn Evaluator>>, String>;
 
+/// A series of the sweep: the reference, or one method (with one kind of
+/// anti-aliasing) at several settings.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+pub enum Family {
+    /// [`REFERENCE`].
+    Reference,
+    /// Point sampling.
+    Point,
+    /// Guaranteed per-pixel rays.
+    Pixel,
+    /// Beams.
+    Beam,
+    /// Beams with regular supersampling.
+    BeamGrid,
+    /// Beams with interval adaptive anti-aliasing.
+    BeamIaa,
+}
+
+impl Family {
+    /// Its name in the CSV, the table and the plot.
+    pub fn name(self) -> &'static str {
+        match self {
+            Family::Reference => "reference",
+            Family::Point => "point",
+            Family::Pixel => "pixel",
+            Family::Beam => "beam",
+            Family::BeamGrid => "beam+grid",
+            Family::BeamIaa => "beam+iaa",
+        }
+    }
+}
+
+/// As in the CSV: `point`, `beam+iaa`, ...
+impl fmt::Display for Family {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// One rendering configuration of the sweep.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Variant {
-    /// The series it belongs to in the plot (`point`, `beam+iaa`, ...).
-    pub family: String,
+    /// The series it belongs to in the plot.
+    pub family: Family,
     /// Its parameter within the family (`steps=64`, `t=1/64`, ...).
     pub param: String,
     /// Visibility method.
@@ -53,9 +91,9 @@ pub struct Variant {
 }
 
 impl Variant {
-    fn new(family: &str, param: &str, method: Method, aa: Aa) -> Variant {
+    fn new(family: Family, param: &str, method: Method, aa: Aa) -> Variant {
         Variant {
-            family: family.to_string(),
+            family,
             param: param.to_string(),
             method,
             aa,
@@ -71,17 +109,17 @@ pub fn default_variants() -> Vec<Variant> {
     let mut v = Vec::new();
     for steps in [16, 64, 256] {
         v.push(Variant::new(
-            "point",
+            Family::Point,
             &format!("steps={steps}"),
             Method::Point { steps },
             Aa::None,
         ));
     }
-    v.push(Variant::new("pixel", "", Method::Pixel, Aa::None));
-    v.push(Variant::new("beam", "", Method::Beam, Aa::None));
+    v.push(Variant::new(Family::Pixel, "", Method::Pixel, Aa::None));
+    v.push(Variant::new(Family::Beam, "", Method::Beam, Aa::None));
     for n in [2, 4] {
         v.push(Variant::new(
-            "beam+grid",
+            Family::BeamGrid,
             &format!("grid:{n}"),
             Method::Beam,
             Aa::Grid(n),
@@ -89,7 +127,7 @@ pub fn default_variants() -> Vec<Variant> {
     }
     for d in [1u32, 4, 16, 64] {
         v.push(Variant::new(
-            "beam+iaa",
+            Family::BeamIaa,
             &format!("t=1/{d}"),
             Method::Beam,
             Aa::Iaa {
@@ -106,8 +144,8 @@ pub fn default_variants() -> Vec<Variant> {
 pub struct AccuracyRow {
     /// Scene name (file stem).
     pub scene: String,
-    /// Series (`reference`, `point`, `pixel`, `beam`, `beam+grid`, `beam+iaa`).
-    pub family: String,
+    /// Series.
+    pub family: Family,
     /// Parameter within the series.
     pub param: String,
     /// Render wall time, ms (best of the repeats).
@@ -230,11 +268,11 @@ pub fn sweep_scene(
     };
     let reference = run(REFERENCE.0, REFERENCE.1, 1)?;
     let centre = run(Method::Pixel, Aa::None, 1)?.hit_mask;
-    let row = |family: &str, param: &str, out: &RenderOutput| {
+    let row = |family: Family, param: &str, out: &RenderOutput| {
         let e = compare(&reference, &centre, out);
         AccuracyRow {
             scene: name.to_string(),
-            family: family.to_string(),
+            family,
             param: param.to_string(),
             time_ms: out.stats.time_ms,
             rmse: e.rmse,
@@ -246,10 +284,10 @@ pub fn sweep_scene(
             pareto: false,
         }
     };
-    let mut rows = vec![row("reference", "pixel+grid:16", &reference)];
+    let mut rows = vec![row(Family::Reference, "pixel+grid:16", &reference)];
     for v in variants {
         let out = run(v.method, v.aa, repeats)?;
-        rows.push(row(&v.family, &v.param, &out));
+        rows.push(row(v.family, &v.param, &out));
     }
     mark_pareto(&mut rows[1..]);
     Ok(rows)
@@ -320,166 +358,6 @@ pub fn write_csv(rows: &[AccuracyRow], path: &Path) -> Result<(), AccuracyError>
         .map_err(|e| AccuracyError::Io(format!("cannot write {}: {e}", path.display())))
 }
 
-// The plot's text uses DejaVu Sans embedded in the binary (no system
-// fonts needed).
-fn register_font() -> Result<(), AccuracyError> {
-    static DONE: OnceLock<bool> = OnceLock::new();
-    let ok = *DONE.get_or_init(|| {
-        plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular())
-            .is_ok()
-    });
-    if ok {
-        Ok(())
-    } else {
-        Err(AccuracyError::Plot("embedded font rejected".into()))
-    }
-}
-
-const FAMILIES: [(&str, RGBColor); 5] = [
-    ("point", RGBColor(214, 39, 40)),
-    ("pixel", RGBColor(148, 103, 189)),
-    ("beam", RGBColor(31, 119, 180)),
-    ("beam+grid", RGBColor(255, 127, 14)),
-    ("beam+iaa", RGBColor(44, 160, 44)),
-];
-
-// Errors of exactly 0 (a variant equal to the reference) are drawn here.
-const RMSE_FLOOR: f64 = 1e-6;
-
-/// Draws time (x) against RMSE (y), log-log, one panel per scene.
-pub fn plot(rows: &[AccuracyRow], path: &Path) -> Result<(), AccuracyError> {
-    register_font()?;
-    let mut scenes: Vec<&str> = Vec::new();
-    for r in rows {
-        if !scenes.contains(&r.scene.as_str()) {
-            scenes.push(&r.scene);
-        }
-    }
-    let n = scenes.len().max(1) as u32;
-    let cols = n.min(2);
-    let rows_n = n.div_ceil(cols);
-    let (pw, ph) = (760u32, 560u32);
-    let (w, h) = (pw * cols, ph * rows_n);
-    let mut buf = vec![255u8; (w * h * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        let perr = |e: &dyn fmt::Display| AccuracyError::Plot(e.to_string());
-        root.fill(&WHITE).map_err(|e| perr(&e))?;
-        let panels = root.split_evenly((rows_n as usize, cols as usize));
-        for (scene, area) in scenes.iter().zip(panels.iter()) {
-            let pts: Vec<&AccuracyRow> = rows
-                .iter()
-                .filter(|r| r.scene == *scene && r.family != "reference")
-                .collect();
-            draw_panel(scene, &pts, area).map_err(|e| perr(&e))?;
-        }
-        root.present().map_err(|e| perr(&e))?;
-    }
-    let img = image::RgbImage::from_raw(w, h, buf)
-        .ok_or_else(|| AccuracyError::Plot("bad buffer".into()))?;
-    img.save_with_format(path, image::ImageFormat::Png)
-        .map_err(|e| AccuracyError::Io(format!("cannot write {}: {e}", path.display())))
-}
-
-type Panel<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
-
-fn draw_panel(
-    scene: &str,
-    pts: &[&AccuracyRow],
-    area: &Panel<'_>,
-) -> Result<(), DrawingAreaErrorKind<<BitMapBackend<'static> as DrawingBackend>::ErrorType>> {
-    let xy = |r: &AccuracyRow| (r.time_ms.max(1e-3), r.rmse.max(RMSE_FLOOR));
-    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-    for r in pts {
-        let (x, y) = xy(r);
-        x0 = x0.min(x);
-        x1 = x1.max(x);
-        y0 = y0.min(y);
-        y1 = y1.max(y);
-    }
-    if pts.is_empty() {
-        (x0, x1, y0, y1) = (1.0, 10.0, 1e-3, 1e-1);
-    }
-    // Margins in log space so the extreme points are not on the frame.
-    let (x0, x1) = (x0 / 1.6, x1 * 1.6);
-    let (y0, y1) = (y0 / 1.6, y1 * 1.6);
-    let mut chart = ChartBuilder::on(area)
-        .caption(
-            format!("{scene}: render time vs error against the reference"),
-            ("sans-serif", 20),
-        )
-        .margin(12)
-        .x_label_area_size(44)
-        .y_label_area_size(72)
-        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
-    chart
-        .configure_mesh()
-        .x_desc("render time (ms, log)")
-        .y_desc("RMSE of linear colour (log)")
-        .x_labels(8)
-        .label_style(("sans-serif", 14))
-        .axis_desc_style(("sans-serif", 15))
-        .x_label_formatter(&|v| format!("{v:.0}"))
-        .y_label_formatter(&|v| format!("{v:.0e}"))
-        .draw()?;
-    for (fam, color) in FAMILIES {
-        let mut series: Vec<&&AccuracyRow> = pts.iter().filter(|r| r.family == fam).collect();
-        if series.is_empty() {
-            continue;
-        }
-        series.sort_by(|a, b| a.time_ms.total_cmp(&b.time_ms));
-        let line: Vec<(f64, f64)> = series.iter().map(|r| xy(r)).collect();
-        chart
-            .draw_series(LineSeries::new(line.clone(), color.stroke_width(2)))?
-            .label(fam)
-            .legend(move |(x, y)| {
-                EmptyElement::at((x, y))
-                    + PathElement::new(vec![(0, 0), (22, 0)], color.stroke_width(2))
-                    + Circle::new((11, 0), 4, color.filled())
-            });
-        chart.draw_series(line.iter().map(|&p| Circle::new(p, 5, color.filled())))?;
-        chart.draw_series(
-            series
-                .iter()
-                .zip(&line)
-                .filter(|(r, _)| !r.param.is_empty())
-                .map(|(r, &p)| {
-                    EmptyElement::at(p)
-                        + Text::new(r.param.clone(), (7, -16), ("sans-serif", 12).into_font())
-                }),
-        )?;
-    }
-    // The Pareto front: ringed points joined by a dashed grey line.
-    let mut front: Vec<(f64, f64)> = pts.iter().filter(|r| r.pareto).map(|r| xy(r)).collect();
-    front.sort_by(|a, b| a.0.total_cmp(&b.0));
-    chart
-        .draw_series(DashedLineSeries::new(
-            front.clone(),
-            6,
-            4,
-            RGBColor(90, 90, 90).stroke_width(1),
-        ))?
-        .label("Pareto front")
-        .legend(|(x, y)| {
-            EmptyElement::at((x, y))
-                + PathElement::new(vec![(0, 0), (22, 0)], RGBColor(90, 90, 90))
-                + Circle::new((11, 0), 8, BLACK.stroke_width(2))
-        });
-    chart.draw_series(
-        front
-            .iter()
-            .map(|&p| Circle::new(p, 9, BLACK.stroke_width(2))),
-    )?;
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 14))
-        .draw()?;
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -487,7 +365,7 @@ mod tests {
     fn r(t: f64, e: f64) -> AccuracyRow {
         AccuracyRow {
             scene: "s".into(),
-            family: "beam".into(),
+            family: Family::Beam,
             param: String::new(),
             time_ms: t,
             rmse: e,
@@ -498,6 +376,29 @@ mod tests {
             rays: 0,
             pareto: false,
         }
+    }
+
+    #[test]
+    fn families_print_as_in_the_csv() {
+        let names: Vec<String> = default_variants()
+            .iter()
+            .map(|v| v.family.to_string())
+            .collect();
+        let want = [
+            "point",
+            "point",
+            "point",
+            "pixel",
+            "beam",
+            "beam+grid",
+            "beam+grid",
+            "beam+iaa",
+            "beam+iaa",
+            "beam+iaa",
+            "beam+iaa",
+        ];
+        assert_eq!(names, want);
+        assert_eq!(Family::Reference.to_string(), "reference");
     }
 
     #[test]

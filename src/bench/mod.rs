@@ -2,3 +2,4 @@
 //! against error of every method and anti-aliasing mode) and its plot.
 
 pub mod accuracy;
+pub mod plot;

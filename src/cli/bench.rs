@@ -1,13 +1,17 @@
 //! `ibeam bench`: benchmarks that print tables with their baseline in the
 //! same run, so every speed claim in the README can be rerun.
 
+use super::render::MethodArg;
 use super::{CliError, EvalKind, build_evaluator};
 use ibeam::eval::Evaluator;
 use ibeam::eval::jit::JitEvaluator;
 use ibeam::interval::Interval;
 use ibeam::ir::passes::simplify;
+use ibeam::render::{RenderOptions, RenderStats, render};
+use ibeam::scene::Scene;
 use std::hint::black_box;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Arguments of `ibeam bench`.
@@ -41,8 +45,10 @@ pub struct RenderArgs {
     #[arg(long, value_delimiter = ',', default_values_t = [512u32, 1024])]
     pub sizes: Vec<u32>,
     /// Methods to compare.
-    #[arg(long, value_delimiter = ',', default_values = ["beam", "pixel", "point"])]
-    pub methods: Vec<String>,
+    // Possible values hidden: `--help` reads as it did when this was a
+    // list of strings (`ibeam render --help` describes each method).
+    #[arg(long, value_enum, value_delimiter = ',', hide_possible_values = true, default_values_t = [MethodArg::Beam, MethodArg::Pixel, MethodArg::Point])]
+    pub methods: Vec<MethodArg>,
     /// Steps along each ray for the point-sampling method.
     #[arg(long, default_value_t = 256)]
     pub steps: u32,
@@ -110,6 +116,26 @@ fn rate(min: Duration, per_call: usize, mut body: impl FnMut()) -> f64 {
 
 const BATCH: usize = 1024;
 
+/// [`BATCH`] random points in the scene's bounds, and a box at each.
+fn sample_inputs(scene: &Scene) -> (Vec<[f64; 3]>, Vec<[Interval; 3]>) {
+    let (lo, hi) = (scene.bounds.min, scene.bounds.max);
+    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    let mut coord = |axis: usize| lo[axis] + (hi[axis] - lo[axis]) * rng.next_unit();
+    let points: Vec<[f64; 3]> = (0..BATCH).map(|_| [coord(0), coord(1), coord(2)]).collect();
+    // Boxes the size of a beam in a 512² render: 1/64 of the bounds.
+    let boxes: Vec<[Interval; 3]> = points
+        .iter()
+        .map(|p| {
+            let side = |axis: usize| {
+                let w = (hi[axis] - lo[axis]) / 64.0;
+                Interval::new(p[axis], p[axis] + w)
+            };
+            [side(0), side(1), side(2)]
+        })
+        .collect();
+    (points, boxes)
+}
+
 fn bench_eval(args: &EvalArgs) -> Result<(), CliError> {
     let files = if args.files.is_empty() {
         default_eval_files()
@@ -132,21 +158,7 @@ fn bench_eval(args: &EvalArgs) -> Result<(), CliError> {
         let compile_ms = start.elapsed().as_secs_f64() * 1e3;
         let jit: &dyn Evaluator = &jit_all;
 
-        let (lo, hi) = (scene.bounds.min, scene.bounds.max);
-        let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
-        let mut coord = |axis: usize| lo[axis] + (hi[axis] - lo[axis]) * rng.next_unit();
-        let points: Vec<[f64; 3]> = (0..BATCH).map(|_| [coord(0), coord(1), coord(2)]).collect();
-        // Boxes the size of a beam in a 512² render: 1/64 of the bounds.
-        let boxes: Vec<[Interval; 3]> = points
-            .iter()
-            .map(|p| {
-                let side = |axis: usize| {
-                    let w = (hi[axis] - lo[axis]) / 64.0;
-                    Interval::new(p[axis], p[axis] + w)
-                };
-                [side(0), side(1), side(2)]
-            })
-            .collect();
+        let (points, boxes) = sample_inputs(&scene);
         let (xs, ys, zs): (Vec<f64>, Vec<f64>, Vec<f64>) = (
             points.iter().map(|p| p[0]).collect(),
             points.iter().map(|p| p[1]).collect(),
@@ -213,18 +225,21 @@ fn si(v: f64) -> String {
     format!("{scaled:.3}{suffix}")
 }
 
+fn default_render_files() -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = ["orthocircle", "metaballs", "drop", "tangle_cube", "csg"]
+        .iter()
+        .map(|n| PathBuf::from(format!("examples/{n}.ib")))
+        .collect();
+    let prospero = PathBuf::from("../shared/models/prospero.vm");
+    if prospero.exists() {
+        files.push(prospero);
+    }
+    files
+}
+
 fn bench_render(args: &RenderArgs) -> Result<(), CliError> {
-    use ibeam::render::{Method, RenderOptions, render};
     let files = if args.files.is_empty() {
-        let mut files: Vec<PathBuf> = ["orthocircle", "metaballs", "drop", "tangle_cube", "csg"]
-            .iter()
-            .map(|n| PathBuf::from(format!("examples/{n}.ib")))
-            .collect();
-        let prospero = PathBuf::from("../shared/models/prospero.vm");
-        if prospero.exists() {
-            files.push(prospero);
-        }
-        files
+        default_render_files()
     } else {
         args.files.clone()
     };
@@ -236,76 +251,16 @@ fn bench_render(args: &RenderArgs) -> Result<(), CliError> {
     for file in &files {
         let scene = ibeam::lang::load_scene(file)?;
         let evaluators = super::build_evaluators(&scene, EvalKind::Jit)?;
+        // Marching a 2D model along its missing axis measures nothing (f
+        // is constant along every ray) and takes minutes: point sampling
+        // is left out of its rows, and a note below says so.
+        let flat = args.methods.contains(&MethodArg::Point) && ibeam::render::is_flat(&scene);
         for &size in &args.sizes {
-            let mut pixel_rays = None;
-            let mut rows = Vec::new();
-            for name in &args.methods {
-                if name == "point" && ibeam::render::is_flat(&scene) {
-                    // Marching a 2D model along its missing axis measures
-                    // nothing (f is constant along every ray) and takes
-                    // minutes: leave the row out, and say so below.
-                    skipped.insert(file.display().to_string());
-                    continue;
-                }
-                let method = match name.as_str() {
-                    "beam" => Method::Beam,
-                    "pixel" => Method::Pixel,
-                    "point" => Method::Point { steps: args.steps },
-                    other => {
-                        return Err(format!("unknown method `{other}` (beam, pixel, point)").into());
-                    }
-                };
-                let opts = RenderOptions {
-                    width: size,
-                    height: size,
-                    threads: args.threads,
-                    method,
-                    want_depth: false,
-                    want_normals: false,
-                    want_classify: false,
-                    progress: false,
-                    prune: true,
-                };
-                // The first render of a scene also compiles its lazy JIT
-                // kinds; render once untimed so every row is steady-state.
-                if rows.is_empty() && pixel_rays.is_none() {
-                    render(
-                        &scene,
-                        &evaluators,
-                        &RenderOptions {
-                            width: 32,
-                            height: 32,
-                            ..opts.clone()
-                        },
-                    )?;
-                }
-                let out = render(&scene, &evaluators, &opts)?;
-                if name == "pixel" {
-                    pixel_rays = Some(out.stats.rays);
-                }
-                rows.push((name.clone(), out.stats));
+            if flat {
+                skipped.insert(file.display().to_string());
             }
-            for (name, st) in rows {
-                let ratio = match pixel_rays {
-                    Some(p) if p > 0 => format!("{:.1}%", 100.0 * st.rays as f64 / p as f64),
-                    _ => "-".into(),
-                };
-                let label = if name == "point" {
-                    format!("point ({} steps)", args.steps)
-                } else {
-                    name
-                };
-                println!(
-                    "| {} | {size}² | {label} | {:.1} | {} | {ratio} | {} | {} | {} | {} |",
-                    file.display(),
-                    st.time_ms,
-                    st.rays,
-                    st.interval_evals,
-                    st.point_evals,
-                    st.shadow_rays,
-                    st.pixels_hit,
-                );
-            }
+            let rows = time_methods(&scene, &evaluators, size, args, flat)?;
+            print_render_rows(file, size, &rows, args.steps);
         }
     }
     for f in skipped {
@@ -314,4 +269,106 @@ fn bench_render(args: &RenderArgs) -> Result<(), CliError> {
         );
     }
     Ok(())
+}
+
+/// Renders `scene` at `size`² with each method asked for (point sampling
+/// left out when `flat`), in order.
+fn time_methods(
+    scene: &Scene,
+    evaluators: &[Arc<dyn Evaluator>],
+    size: u32,
+    args: &RenderArgs,
+    flat: bool,
+) -> Result<Vec<(MethodArg, RenderStats)>, CliError> {
+    let mut rows = Vec::new();
+    for &method in &args.methods {
+        if method == MethodArg::Point && flat {
+            continue;
+        }
+        let opts = RenderOptions {
+            width: size,
+            height: size,
+            threads: args.threads,
+            method: method.method(args.steps),
+            want_depth: false,
+            want_normals: false,
+            want_classify: false,
+            progress: false,
+            prune: true,
+        };
+        // The first render of a scene also compiles its lazy JIT kinds;
+        // render once untimed so every row is steady-state.
+        if rows.is_empty() {
+            render(
+                scene,
+                evaluators,
+                &RenderOptions {
+                    width: 32,
+                    height: 32,
+                    ..opts.clone()
+                },
+            )?;
+        }
+        let out = render(scene, evaluators, &opts)?;
+        rows.push((method, out.stats));
+    }
+    Ok(rows)
+}
+
+/// Prints one table row per method, with rays relative to the pixel
+/// method's when it ran.
+fn print_render_rows(file: &Path, size: u32, rows: &[(MethodArg, RenderStats)], steps: u32) {
+    let pixel_rays = rows
+        .iter()
+        .rev()
+        .find(|(m, _)| *m == MethodArg::Pixel)
+        .map(|(_, st)| st.rays);
+    for (method, st) in rows {
+        let ratio = match pixel_rays {
+            Some(p) if p > 0 => format!("{:.1}%", 100.0 * st.rays as f64 / p as f64),
+            _ => "-".into(),
+        };
+        let label = if *method == MethodArg::Point {
+            format!("point ({steps} steps)")
+        } else {
+            method.to_string()
+        };
+        println!(
+            "| {} | {size}² | {label} | {:.1} | {} | {ratio} | {} | {} | {} | {} |",
+            file.display(),
+            st.time_ms,
+            st.rays,
+            st.interval_evals,
+            st.point_evals,
+            st.shadow_rays,
+            st.pixels_hit,
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(clap::Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: RenderArgs,
+    }
+
+    #[test]
+    fn methods_are_the_same_names_as_before() {
+        let p = |extra: &[&str]| {
+            let mut v = vec!["bench"];
+            v.extend_from_slice(extra);
+            Cli::try_parse_from(v).map(|c| c.args.methods)
+        };
+        use MethodArg::{Beam, Pixel, Point};
+        assert_eq!(p(&[]).unwrap(), [Beam, Pixel, Point]);
+        assert_eq!(p(&["--methods", "point,beam"]).unwrap(), [Point, Beam]);
+        assert!(p(&["--methods", "ray"]).is_err());
+        let names: Vec<String> = [Beam, Pixel, Point].iter().map(|m| m.to_string()).collect();
+        assert_eq!(names, ["beam", "pixel", "point"]);
+    }
 }

@@ -1,5 +1,6 @@
 //! `ibeam render`: scene settings are the defaults, flags override them.
 
+use std::fmt;
 use std::fs::OpenOptions;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -20,6 +21,28 @@ pub enum MethodArg {
     Pixel,
     /// Fixed-step point sampling (fast, can miss thin features).
     Point,
+}
+
+impl MethodArg {
+    /// The render method, with `steps` samples per ray for point sampling.
+    pub fn method(self, steps: u32) -> Method {
+        match self {
+            MethodArg::Beam => Method::Beam,
+            MethodArg::Pixel => Method::Pixel,
+            MethodArg::Point => Method::Point { steps },
+        }
+    }
+}
+
+/// As on the command line: `beam`, `pixel`, `point`.
+impl fmt::Display for MethodArg {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            MethodArg::Beam => "beam",
+            MethodArg::Pixel => "pixel",
+            MethodArg::Point => "point",
+        })
+    }
 }
 
 /// Arguments of `ibeam render`.
@@ -131,12 +154,7 @@ pub fn aa_and_method(args: &Args) -> (Aa, Method) {
         },
         other => other,
     };
-    let method = match args.method {
-        MethodArg::Beam => Method::Beam,
-        MethodArg::Pixel => Method::Pixel,
-        MethodArg::Point => Method::Point { steps: args.steps },
-    };
-    (aa, method)
+    (aa, args.method.method(args.steps))
 }
 
 /// Anti-aliasing of the reference render (with [`Method::Pixel`]).

@@ -146,6 +146,24 @@ pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
     (line, col)
 }
 
+/// The closest known name to `name`, if any is close enough to be a likely
+/// typo.
+pub fn suggest<'n>(name: &str, candidates: impl Iterator<Item = &'n str>) -> Option<&'n str> {
+    let limit = (name.chars().count() / 3).max(1);
+    let mut best: Option<(usize, &str)> = None;
+    for c in candidates {
+        let d = strsim::damerau_levenshtein(name, c);
+        let better = match best {
+            None => true,
+            Some((bd, bn)) => d < bd || (d == bd && c < bn),
+        };
+        if d <= limit && better {
+            best = Some((d, c));
+        }
+    }
+    best.map(|(_, c)| c)
+}
+
 /// A LoadError without a source position (e.g. an unreadable file).
 pub fn error_without_position(file: &str, message: String) -> LoadError {
     LoadError {
@@ -161,6 +179,14 @@ pub fn error_without_position(file: &str, message: String) -> LoadError {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn suggestions_only_for_close_names() {
+        let names = ["sphere", "box", "torus"];
+        assert_eq!(suggest("sphre", names.iter().copied()), Some("sphere"));
+        assert_eq!(suggest("bx", names.iter().copied()), Some("box"));
+        assert_eq!(suggest("cylinder", names.iter().copied()), None);
+    }
 
     #[test]
     fn line_and_column_are_one_based_in_characters() {

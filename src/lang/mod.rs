@@ -5,6 +5,7 @@
 //! [`load_scene`], [`load_scene_source`] and [`function_from_formula`].
 
 pub mod ast;
+pub mod builtins;
 pub mod diag;
 pub mod lexer;
 pub mod lower;

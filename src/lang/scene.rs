@@ -5,7 +5,8 @@
 use super::ast::{Expr, Ident, Item, Prop, PropValue, Span};
 use super::diag::Diag;
 use crate::ir::Function;
-use crate::lang::lower::{Program, depends_on_coords, suggest};
+use crate::lang::diag::suggest;
+use crate::lang::lower::{Program, depends_on_coords};
 use crate::scene::{Bounds, Camera, Light, LightKind, Object, Projection, RenderSettings, Scene};
 
 /// The colour of an object without a `color` property.
@@ -346,6 +347,43 @@ fn bounds(
     })
 }
 
+/// Lowers an object named `name` unless an object of `earlier` has its name.
+fn object(
+    prog: &Program,
+    src: usize,
+    name: &Ident,
+    body: &Expr,
+    props: &[Prop],
+    earlier: &[&Ident],
+) -> Result<Object, Diag> {
+    if let Some(prev) = earlier.iter().find(|n| n.name == name.name) {
+        return Err(span_diag(
+            src,
+            name.span,
+            format!("object `{}` is defined twice", name.name),
+        )
+        .with_secondary(src, prev.span.0..prev.span.1, "first defined here"));
+    }
+    let function = prog.lower(body, src)?;
+    if !depends_on_coords(&function) {
+        return Err(span_diag(
+            src,
+            body.span,
+            "this is not a shape: it does not depend on x, y or z".into(),
+        ));
+    }
+    let ps = check_props(src, "an object", props, &["color"])?;
+    let color = match find(&ps, "color") {
+        Some(p) => color(prog, src, p)?,
+        None => DEFAULT_OBJECT_COLOR,
+    };
+    Ok(Object {
+        name: name.name.clone(),
+        function,
+        color,
+    })
+}
+
 /// Lowers and validates the items of source `src` (whose text is
 /// `text_len` bytes long) into a scene.
 pub fn build(prog: &Program, items: &[Item], src: usize, text_len: usize) -> Result<Scene, Diag> {
@@ -359,37 +397,8 @@ pub fn build(prog: &Program, items: &[Item], src: usize, text_len: usize) -> Res
         match item {
             Item::Let { .. } | Item::Fn { .. } => {}
             Item::Object { name, body, props } => {
-                if let Some(prev) = object_names.iter().find(|n| n.name == name.name) {
-                    return Err(span_diag(
-                        src,
-                        name.span,
-                        format!("object `{}` is defined twice", name.name),
-                    )
-                    .with_secondary(
-                        src,
-                        prev.span.0..prev.span.1,
-                        "first defined here",
-                    ));
-                }
-                let function = prog.lower(body, src)?;
-                if !depends_on_coords(&function) {
-                    return Err(span_diag(
-                        src,
-                        body.span,
-                        "this is not a shape: it does not depend on x, y or z".into(),
-                    ));
-                }
-                let ps = check_props(src, "an object", props, &["color"])?;
-                let color = match find(&ps, "color") {
-                    Some(p) => color(prog, src, p)?,
-                    None => DEFAULT_OBJECT_COLOR,
-                };
+                objects.push(object(prog, src, name, body, props, &object_names)?);
                 object_names.push(name);
-                objects.push(Object {
-                    name: name.name.clone(),
-                    function,
-                    color,
-                });
             }
             Item::Block { keyword, props } => match keyword.name.as_str() {
                 "camera" => {

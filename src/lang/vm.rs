@@ -1,11 +1,13 @@
 //! Import of Fidget's `.vm` text format: one SSA op per line,
 //! `_id op args…`, `#` comments; the last op is the result.
 
-use super::diag::Diag;
+use super::diag::{Diag, suggest};
 use crate::ir::{BinaryOp, Builder, Function, UnaryOp, ValueId, Var};
 use std::collections::HashMap;
+use std::ops::Range;
 
 /// What a `.vm` opcode lowers to.
+#[derive(Copy, Clone, Debug, PartialEq)]
 enum VmOp {
     Var(Var),
     Const,
@@ -14,54 +16,44 @@ enum VmOp {
     Binary(BinaryOp),
 }
 
-/// The opcodes we read (every one that has an IR equivalent).
-const OPS: &[(&str, usize)] = &[
-    ("var-x", 0),
-    ("var-y", 0),
-    ("var-z", 0),
-    ("const", 1),
-    ("neg", 1),
-    ("abs", 1),
-    ("recip", 1),
-    ("sqrt", 1),
-    ("square", 1),
-    ("exp", 1),
-    ("ln", 1),
-    ("sin", 1),
-    ("cos", 1),
-    ("add", 2),
-    ("sub", 2),
-    ("mul", 2),
-    ("div", 2),
-    ("min", 2),
-    ("max", 2),
-    ("atan2", 2),
+impl VmOp {
+    /// How many arguments the opcode takes (a literal for `const`).
+    fn arity(self) -> usize {
+        match self {
+            VmOp::Var(_) => 0,
+            VmOp::Const | VmOp::Unary(_) | VmOp::Recip => 1,
+            VmOp::Binary(_) => 2,
+        }
+    }
+}
+
+/// The opcodes we read (every one that has an IR equivalent), with what
+/// each lowers to; the arity follows from that.
+const OPS: &[(&str, VmOp)] = &[
+    ("var-x", VmOp::Var(Var::X)),
+    ("var-y", VmOp::Var(Var::Y)),
+    ("var-z", VmOp::Var(Var::Z)),
+    ("const", VmOp::Const),
+    ("neg", VmOp::Unary(UnaryOp::Neg)),
+    ("abs", VmOp::Unary(UnaryOp::Abs)),
+    ("recip", VmOp::Recip),
+    ("sqrt", VmOp::Unary(UnaryOp::Sqrt)),
+    ("square", VmOp::Unary(UnaryOp::Square)),
+    ("exp", VmOp::Unary(UnaryOp::Exp)),
+    ("ln", VmOp::Unary(UnaryOp::Ln)),
+    ("sin", VmOp::Unary(UnaryOp::Sin)),
+    ("cos", VmOp::Unary(UnaryOp::Cos)),
+    ("add", VmOp::Binary(BinaryOp::Add)),
+    ("sub", VmOp::Binary(BinaryOp::Sub)),
+    ("mul", VmOp::Binary(BinaryOp::Mul)),
+    ("div", VmOp::Binary(BinaryOp::Div)),
+    ("min", VmOp::Binary(BinaryOp::Min)),
+    ("max", VmOp::Binary(BinaryOp::Max)),
+    ("atan2", VmOp::Binary(BinaryOp::Atan2)),
 ];
 
 fn vm_op(name: &str) -> Option<VmOp> {
-    Some(match name {
-        "var-x" => VmOp::Var(Var::X),
-        "var-y" => VmOp::Var(Var::Y),
-        "var-z" => VmOp::Var(Var::Z),
-        "const" => VmOp::Const,
-        "neg" => VmOp::Unary(UnaryOp::Neg),
-        "abs" => VmOp::Unary(UnaryOp::Abs),
-        "recip" => VmOp::Recip,
-        "sqrt" => VmOp::Unary(UnaryOp::Sqrt),
-        "square" => VmOp::Unary(UnaryOp::Square),
-        "exp" => VmOp::Unary(UnaryOp::Exp),
-        "ln" => VmOp::Unary(UnaryOp::Ln),
-        "sin" => VmOp::Unary(UnaryOp::Sin),
-        "cos" => VmOp::Unary(UnaryOp::Cos),
-        "add" => VmOp::Binary(BinaryOp::Add),
-        "sub" => VmOp::Binary(BinaryOp::Sub),
-        "mul" => VmOp::Binary(BinaryOp::Mul),
-        "div" => VmOp::Binary(BinaryOp::Div),
-        "min" => VmOp::Binary(BinaryOp::Min),
-        "max" => VmOp::Binary(BinaryOp::Max),
-        "atan2" => VmOp::Binary(BinaryOp::Atan2),
-        _ => return None,
-    })
+    OPS.iter().find(|(n, _)| *n == name).map(|(_, op)| *op)
 }
 
 /// Words of a line with their byte offsets in the whole text.
@@ -84,6 +76,13 @@ fn words(line: &str, base: usize) -> Vec<(usize, &str)> {
     out
 }
 
+/// A word of a line with its byte offset in the whole text.
+type Word<'t> = (usize, &'t str);
+
+fn word_span((at, s): Word<'_>) -> Range<usize> {
+    at..at + s.len()
+}
+
 /// Parses `.vm` text (source number `src`) into a function whose root is
 /// the last op.
 pub fn parse_vm(text: &str, src: usize) -> Result<Function, Diag> {
@@ -99,83 +98,14 @@ pub fn parse_vm(text: &str, src: usize) -> Result<Function, Diag> {
         if w.is_empty() {
             continue;
         }
-        let span = |(at, s): (usize, &str)| at..at + s.len();
-        let Some(&op_word) = w.get(1) else {
-            return Err(
-                Diag::new(src, span(w[0]), format!("`{}` has no op", w[0].1))
-                    .with_help("each line is `_id op args…`, e.g. `_3 add _1 _2`"),
-            );
-        };
-        let op = vm_op(op_word.1).ok_or_else(|| {
-            let d = Diag::new(src, span(op_word), format!("unknown op `{}`", op_word.1));
-            match crate::lang::lower::suggest(op_word.1, OPS.iter().map(|(n, _)| *n)) {
-                Some(s) => d.with_help(format!("did you mean `{s}`?")),
-                None => d.with_help("supported ops: var-x var-y var-z const neg abs recip sqrt square exp ln sin cos add sub mul div min max atan2"),
-            }
-        })?;
-        let arity = OPS
-            .iter()
-            .find(|(n, _)| *n == op_word.1)
-            .map_or(0, |(_, a)| *a);
-        let args = &w[2..];
-        if args.len() != arity {
-            let at = args.get(arity).copied().unwrap_or(op_word);
+        let v = parse_line(&mut b, &ids, &w, src)?;
+        if let Some((_, first)) = ids.get(w[0].1) {
             return Err(Diag::new(
                 src,
-                span(at),
-                format!(
-                    "`{}` takes {arity} argument{}, but {} {} given",
-                    op_word.1,
-                    if arity == 1 { "" } else { "s" },
-                    args.len(),
-                    if args.len() == 1 { "was" } else { "were" }
-                ),
-            ));
-        }
-        let operand = |i: usize| -> Result<ValueId, Diag> {
-            let a = args[i];
-            ids.get(a.1).map(|(v, _)| *v).ok_or_else(|| {
-                Diag::new(
-                    src,
-                    span(a),
-                    format!("`{}` is not defined before this line", a.1),
-                )
-            })
-        };
-        let v = match op {
-            VmOp::Var(v) => b.var(v),
-            VmOp::Const => {
-                let a = args[0];
-                match a.1.parse::<f64>() {
-                    Ok(c) if c.is_finite() => b.constant(c),
-                    _ => {
-                        return Err(Diag::new(
-                            src,
-                            span(a),
-                            format!("bad number literal `{}`", a.1),
-                        ));
-                    }
-                }
-            }
-            VmOp::Unary(u) => {
-                let a = operand(0)?;
-                b.unary(u, a)
-            }
-            VmOp::Recip => {
-                let a = operand(0)?;
-                let one = b.constant(1.0);
-                b.binary(BinaryOp::Div, one, a)
-            }
-            VmOp::Binary(o) => {
-                let (x, y) = (operand(0)?, operand(1)?);
-                b.binary(o, x, y)
-            }
-        };
-        if let Some((_, first)) = ids.get(w[0].1) {
-            return Err(
-                Diag::new(src, span(w[0]), format!("`{}` is defined twice", w[0].1))
-                    .with_secondary(src, *first..*first + w[0].1.len(), "first defined here"),
-            );
+                word_span(w[0]),
+                format!("`{}` is defined twice", w[0].1),
+            )
+            .with_secondary(src, *first..*first + w[0].1.len(), "first defined here"));
         }
         ids.insert(w[0].1, (v, w[0].0));
         last = Some(v);
@@ -184,5 +114,93 @@ pub fn parse_vm(text: &str, src: usize) -> Result<Function, Diag> {
         Some(root) => Ok(b.finish(root)),
         None => Err(Diag::new(src, 0..0, "the file has no ops".into())
             .with_help("each line is `_id op args…`, e.g. `_0 var-x`")),
+    }
+}
+
+/// Emits the op of one line's words `w` (at least one), whose operands
+/// `ids` defines.
+fn parse_line(
+    b: &mut Builder,
+    ids: &HashMap<&str, (ValueId, usize)>,
+    w: &[Word<'_>],
+    src: usize,
+) -> Result<ValueId, Diag> {
+    let Some(&op_word) = w.get(1) else {
+        return Err(
+            Diag::new(src, word_span(w[0]), format!("`{}` has no op", w[0].1))
+                .with_help("each line is `_id op args…`, e.g. `_3 add _1 _2`"),
+        );
+    };
+    let op = vm_op(op_word.1).ok_or_else(|| unknown_op(op_word, src))?;
+    let arity = op.arity();
+    let args = &w[2..];
+    if args.len() != arity {
+        let at = args.get(arity).copied().unwrap_or(op_word);
+        return Err(Diag::new(
+            src,
+            word_span(at),
+            format!(
+                "`{}` takes {arity} argument{}, but {} {} given",
+                op_word.1,
+                if arity == 1 { "" } else { "s" },
+                args.len(),
+                if args.len() == 1 { "was" } else { "were" }
+            ),
+        ));
+    }
+    let operand = |i: usize| -> Result<ValueId, Diag> {
+        let a = args[i];
+        ids.get(a.1).map(|(v, _)| *v).ok_or_else(|| {
+            Diag::new(
+                src,
+                word_span(a),
+                format!("`{}` is not defined before this line", a.1),
+            )
+        })
+    };
+    Ok(match op {
+        VmOp::Var(v) => b.var(v),
+        VmOp::Const => {
+            let a = args[0];
+            match a.1.parse::<f64>() {
+                Ok(c) if c.is_finite() => b.constant(c),
+                _ => {
+                    return Err(Diag::new(
+                        src,
+                        word_span(a),
+                        format!("bad number literal `{}`", a.1),
+                    ));
+                }
+            }
+        }
+        VmOp::Unary(u) => {
+            let a = operand(0)?;
+            b.unary(u, a)
+        }
+        VmOp::Recip => {
+            let a = operand(0)?;
+            let one = b.constant(1.0);
+            b.binary(BinaryOp::Div, one, a)
+        }
+        VmOp::Binary(o) => {
+            let (x, y) = (operand(0)?, operand(1)?);
+            b.binary(o, x, y)
+        }
+    })
+}
+
+/// "unknown op", with the closest opcode or the list of them as a hint.
+fn unknown_op(op_word: Word<'_>, src: usize) -> Diag {
+    let d = Diag::new(
+        src,
+        word_span(op_word),
+        format!("unknown op `{}`", op_word.1),
+    );
+    match suggest(op_word.1, OPS.iter().map(|(n, _)| *n)) {
+        Some(s) => d.with_help(format!("did you mean `{s}`?")),
+        None => {
+            let names: Vec<&str> = OPS.iter().map(|(n, _)| *n).collect();
+            d.with_help(format!("supported ops: {}", names.join(" ")))
+        }
     }
 }
