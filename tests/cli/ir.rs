@@ -5,10 +5,9 @@ use ibeam::ir::passes::simplify;
 use ibeam::ir::print::print;
 use std::path::{Path, PathBuf};
 
-mod common;
+use crate::common::{ibeam, stderr, stdout};
 
-use common::{ibeam, stderr, stdout};
-
+/// Every `.ib` file of examples/, sorted.
 fn examples() -> Vec<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
     let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
