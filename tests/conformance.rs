@@ -15,7 +15,9 @@ use ibeam::eval::regional::Regional;
 use ibeam::interval::Interval;
 use ibeam::ir::Function;
 use ibeam::ir::prune::prune;
-use ibeam::ir::random::random_function;
+use ibeam::ir::random::{Rng, random_function};
+
+use common::{EDGE_VALUES, random_box};
 
 mod interp {
     use super::*;
@@ -80,5 +82,29 @@ mod regional {
             })
             .count();
         assert!(pruned >= 30, "only {pruned} of 300 random functions pruned");
+    }
+
+    /// The suite's boxes and points fall on both sides of the region, so
+    /// both the pruned function and the fallback answer.
+    #[test]
+    fn the_suite_reaches_both_sides_of_the_region() {
+        let within =
+            |b: [Interval; 3]| (0..3).all(|k| REGION[k].lo <= b[k].lo && b[k].hi <= REGION[k].hi);
+        let mut rng = Rng::new(7);
+        let boxes: Vec<bool> = (0..1000).map(|_| within(random_box(&mut rng))).collect();
+        let inside = boxes.iter().filter(|&&b| b).count();
+        assert!(
+            inside >= 50 && boxes.len() - inside >= 50,
+            "{inside} of 1000 boxes inside"
+        );
+        let points: Vec<bool> = EDGE_VALUES
+            .iter()
+            .flat_map(|&x| EDGE_VALUES.map(|y| within([x, y, 0.5].map(Interval::point))))
+            .collect();
+        let inside = points.iter().filter(|&&b| b).count();
+        assert!(
+            inside >= 25 && points.len() - inside >= 25,
+            "{inside} edge points inside"
+        );
     }
 }
