@@ -22,6 +22,7 @@ fn scratch(test: &str) -> PathBuf {
     d
 }
 
+/// The path of examples/`name`.
 fn example(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("examples")

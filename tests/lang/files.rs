@@ -114,6 +114,7 @@ fn example_bounds_enclose_the_surface() {
 
 // ------------------------------------------------------------ .vm import
 
+/// The scene of `.vm` model text.
 fn vm(text: &str) -> Result<Scene, LoadError> {
     load_scene_source("model.vm", text)
 }

@@ -4,6 +4,7 @@ use super::*;
 
 // ------------------------------------------------------------- limits
 
+/// An object `open`ⁿ `inner` `close`ⁿ.
 fn nested(open: &str, inner: &str, close: &str, n: usize) -> String {
     let mut s = String::with_capacity(n * (open.len() + close.len()) + 32);
     s.push_str("object o = ");
@@ -129,6 +130,7 @@ fn a_hundred_thousand_terms() {
 
 // ------------------------------------------------------------ robustness
 
+/// Tokens and pieces of the language, for random token soup.
 const FRAGMENTS: &[&str] = &[
     "object",
     "o",
@@ -207,6 +209,7 @@ proptest::proptest! {
     }
 }
 
+/// Random well-formed expressions, calls and operators nested.
 fn expr_strategy() -> impl proptest::strategy::Strategy<Value = String> {
     use proptest::prelude::*;
     let leaf = prop_oneof![

@@ -69,6 +69,7 @@ fn assert_err(src: &str, message: &str, line: usize, col: usize) -> LoadError {
     e
 }
 
+/// A point off every axis and plane of symmetry.
 const P: [f64; 3] = [0.3, -0.7, 1.1];
 
 /// The crate root.

@@ -20,6 +20,7 @@ use ibeam::scene::{Bounds, Camera, Light, LightKind, Object, Projection, RenderS
 
 // ---------------------------------------------------------------- shapes
 
+/// The point interval [v, v].
 fn pt(v: f64) -> Interval {
     Interval::point(v)
 }
@@ -208,10 +209,12 @@ fn object_using(name: &str, color: [f64; 3], vars: &[Var]) -> Object {
     }
 }
 
+/// An object over x, y and z (see [`object_using`]).
 fn object(name: &str, color: [f64; 3]) -> Object {
     object_using(name, color, &Var::ALL)
 }
 
+/// A scene of `n` objects seen by `camera` under `lights`.
 fn scene(n: usize, camera: Camera, lights: Vec<Light>) -> Scene {
     let colors = [[0.8, 0.3, 0.2], [0.2, 0.5, 0.8], [0.6, 0.6, 0.6]];
     Scene {
@@ -225,6 +228,7 @@ fn scene(n: usize, camera: Camera, lights: Vec<Light>) -> Scene {
     }
 }
 
+/// The default light, casting no shadows.
 fn no_shadow_light() -> Light {
     Light {
         shadows: false,
@@ -232,6 +236,7 @@ fn no_shadow_light() -> Light {
     }
 }
 
+/// Options for a `w × h` render by `method` on one thread.
 fn opts(w: u32, h: u32, method: Method) -> RenderOptions {
     RenderOptions {
         threads: Some(1),
@@ -240,6 +245,7 @@ fn opts(w: u32, h: u32, method: Method) -> RenderOptions {
     }
 }
 
+/// Renders `sc` with the evaluators `ev`, which must succeed.
 fn run(sc: &Scene, ev: Vec<Arc<dyn Evaluator>>, o: &RenderOptions) -> RenderOutput {
     render(sc, &ev, o).expect("render")
 }
@@ -281,6 +287,7 @@ fn reference(
     (hit, near)
 }
 
+/// How many pixels a reference comparison compared and skipped.
 struct Check {
     compared: usize,
     skipped: usize,
@@ -333,15 +340,18 @@ fn check_against_reference(
     c
 }
 
+/// Signed distance to the unit sphere.
 fn sphere_sdf(p: [f64; 3]) -> f64 {
     (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() - 1.0
 }
 
+/// Signed distance to the torus of radii 1 and 0.5 around z.
 fn torus_sdf(p: [f64; 3]) -> f64 {
     let q = (p[0] * p[0] + p[1] * p[1]).sqrt() - 1.0;
     (q * q + p[2] * p[2]).sqrt() - 0.5
 }
 
+/// The unit sphere at the origin.
 fn sphere() -> Arc<dyn Evaluator> {
     Arc::new(Sphere {
         c: [0.0; 3],
@@ -349,6 +359,7 @@ fn sphere() -> Arc<dyn Evaluator> {
     })
 }
 
+/// The torus of radii 1 and 0.5 around the z axis.
 fn torus() -> Arc<dyn Evaluator> {
     Arc::new(Torus {
         big: 1.0,
@@ -356,6 +367,7 @@ fn torus() -> Arc<dyn Evaluator> {
     })
 }
 
+/// A camera looking down at the torus from above one side.
 fn torus_camera() -> Camera {
     Camera {
         eye: [0.5, -3.0, 3.5],

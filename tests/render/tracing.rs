@@ -168,6 +168,7 @@ fn thin_shell_is_found_where_point_sampling_misses_it() {
     );
 }
 
+/// The torus, a sphere above it and the ground, under two lights.
 fn two_object_scene() -> (Scene, Vec<Arc<dyn Evaluator>>) {
     let mut sc = scene(
         3,

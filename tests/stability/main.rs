@@ -38,19 +38,23 @@ fn interp_evaluators(scene: &Scene) -> Vec<Arc<dyn Evaluator>> {
     build_evaluators(scene, EvalKind::Interp).expect("valid IR")
 }
 
+/// The scene of `src`, which must load.
 fn load(name: &str, src: &str) -> Scene {
     ibeam::lang::load_scene_source(name, src).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
+/// The scene of examples/`name`, which must load.
 fn load_example(name: &str) -> Scene {
     let path = format!("{}/examples/{name}", env!("CARGO_MANIFEST_DIR"));
     ibeam::lang::load_scene(std::path::Path::new(&path)).unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// Renders `scene` at `w × h` by `method` with the JIT.
 fn render_with(scene: &Scene, w: u32, h: u32, method: Method) -> RenderOutput {
     render_by(scene, &evaluators(scene), w, h, method)
 }
 
+/// Renders `scene` with `evals`, depths and normals on, checking the output is free of NaN.
 fn render_by(
     scene: &Scene,
     evals: &[Arc<dyn Evaluator>],
@@ -67,6 +71,7 @@ fn render_by(
     out
 }
 
+/// The beam render of `scene` at `w × h`.
 fn beam(scene: &Scene, w: u32, h: u32) -> RenderOutput {
     render_with(scene, w, h, Method::Beam)
 }
@@ -82,6 +87,7 @@ fn check_finite(out: &RenderOutput) {
     assert_eq!(out.stats.pixels_hit as usize, count(&out.hit_mask));
 }
 
+/// How many pixels of `mask` are set.
 fn count(mask: &[bool]) -> usize {
     mask.iter().filter(|&&m| m).count()
 }
@@ -162,6 +168,7 @@ fn min_quadratic(a: f64, b: f64, q: f64, t0: f64, t1: f64) -> f64 {
     m
 }
 
+/// The dot product of two vectors.
 fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
@@ -213,10 +220,12 @@ fn assert_beam_equals_pixel(name: &str, scene: &Scene, got: &RenderOutput, w: u3
     assert!(diff.is_empty(), "{name}: beam and pixel differ at {diff:?}");
 }
 
+/// Scene text for `object` seen from `eye`, in the cube of half-side `bounds`.
 fn scene_text(object: &str, eye: [f64; 3], target: [f64; 3], bounds: f64) -> String {
     scene_text_box(object, eye, target, [-bounds; 3], [bounds; 3])
 }
 
+/// Scene text for `object` seen from `eye`, in the box `lo .. hi`.
 fn scene_text_box(
     object: &str,
     eye: [f64; 3],
@@ -237,4 +246,5 @@ fn scene_text_box(
     )
 }
 
+/// Where the camera of most cases stands.
 const EYE: [f64; 3] = [2.0, 1.5, 3.5];
