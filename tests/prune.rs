@@ -10,10 +10,11 @@ use ibeam::ir::prune::prune;
 use ibeam::ir::random::{Rng, random_function};
 use ibeam::ir::validate::validate;
 
-fn same(a: f64, b: f64) -> bool {
-    a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
-}
+mod common;
 
+use common::same;
+
+/// A point of `b`, its corners' coordinates often.
 fn sample(r: &mut Rng, b: [Interval; 3]) -> [f64; 3] {
     b.map(|c| match r.below(8) {
         0 => c.lo,

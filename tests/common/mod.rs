@@ -1,26 +1,25 @@
-//! Shared test helpers: the evaluator conformance suite that every
-//! implementation of `Evaluator` (the interpreter, the JIT) runs, and
-//! generators of edge values, boxes and points.
+//! Shared test helpers: the evaluator conformance suite ([`suite`]) that
+//! every implementation of `Evaluator` runs (the interpreter, the JIT, the
+//! regional evaluator), generators of edge values, boxes and points, and
+//! the runner of the `ibeam` binary.
 //!
-//! Use it from a test file with `mod common;` and one `#[test]` per check:
-//! ```ignore
-//! #[test]
-//! fn point_ops() { common::check_point_ops(&|f| Box::new(Interpreter::new(f.clone()))); }
-//! ```
-#![allow(dead_code)]
+//! Use it from a test file with `mod common;` (from a directory module,
+//! `#[path = "../common/mod.rs"] mod common;`).
+#![allow(dead_code, unused_imports, unused_macros)]
+
+#[macro_use]
+pub mod suite;
+
+use std::process::{Command, Output};
 
 use ibeam::eval::Evaluator;
-use ibeam::eval::interp::Interpreter;
 use ibeam::interval::Interval;
-use ibeam::ir::random::{BINARY_OPS, Rng, UNARY_OPS, random_function};
+use ibeam::ir::random::{BINARY_OPS, Rng, UNARY_OPS};
 use ibeam::ir::semantics::{point_binary, point_powi, point_unary};
-use ibeam::ir::{BinaryOp, Builder, Function, UnaryOp, Var};
-
-/// Builds the evaluator under test for a function.
-pub type Make<'a> = &'a dyn Fn(&Function) -> Box<dyn Evaluator>;
+use ibeam::ir::{BinaryOp, Builder, Function, Op, UnaryOp, ValueId, Var};
 
 /// Arguments that exercise the edges of every op.
-pub const EDGE_VALUES: [f64; 20] = [
+pub const EDGE_VALUES: [f64; 25] = [
     0.0,
     -0.0,
     1.0,
@@ -28,13 +27,18 @@ pub const EDGE_VALUES: [f64; 20] = [
     0.5,
     2.0,
     -2.2,
+    -2.5,
     3.7,
     std::f64::consts::PI,
     -std::f64::consts::FRAC_PI_2,
     1e10,
     1e300,
     -1e300,
+    1e308,
+    -1e308,
+    f64::MAX,
     1e-300,
+    f64::MIN_POSITIVE,
     5e-324,
     -5e-324,
     f64::INFINITY,
@@ -42,7 +46,6 @@ pub const EDGE_VALUES: [f64; 20] = [
     f64::NAN,
     1e16,
 ];
-
 /// Argument intervals that exercise the edges of every op: points, signed
 /// zeros, intervals with 0 inside or at an end, half-lines, huge and tiny.
 pub const EDGE_INTERVALS: [(f64, f64); 20] = [
@@ -68,7 +71,91 @@ pub const EDGE_INTERVALS: [(f64, f64); 20] = [
     (2.0, f64::INFINITY),
 ];
 
-/// Bit equality with every NaN equal to every other.
+/// Every interval of [`EDGE_INTERVALS`] and more: EMPTY, signed zero
+/// points, subnormal and infinite points, the whole finite line.
+pub fn edge_intervals() -> Vec<Interval> {
+    let mut v = vec![
+        Interval::EMPTY,
+        Interval::ENTIRE,
+        Interval::new(-0.0, -0.0),
+        Interval::new(-1.0, 2.0),
+        Interval::new(-3.0, -0.5),
+        Interval::new(f64::NEG_INFINITY, -1.0),
+        Interval::new(1e300, 1e308),
+        Interval::new(-f64::MAX, f64::MAX),
+        Interval::new(5e-324, 5e-324),
+        Interval::new(-5e-324, 5e-324),
+        Interval::new(f64::INFINITY, f64::INFINITY),
+        Interval::new(-2.0, f64::INFINITY),
+        Interval::point(-2.5),
+        Interval::point(std::f64::consts::PI),
+    ];
+    v.extend(EDGE_INTERVALS.iter().map(|&(lo, hi)| Interval::new(lo, hi)));
+    v
+}
+
+/// Equal bits, or finite and within a few ulps (relative 1e-12).
+pub fn close(a: f64, b: f64) -> bool {
+    same(a, b) || (a.is_finite() && b.is_finite() && (a - b).abs() <= 1e-12 * a.abs().max(b.abs()))
+}
+
+/// Both bounds equal by [`same`].
+pub fn same_iv(a: Interval, b: Interval) -> bool {
+    same(a.lo, b.lo) && same(a.hi, b.hi)
+}
+
+/// The one-op function of (x, y) with the kind of `op` (its operands are
+/// replaced by x and y).
+pub fn one_op(op: Op) -> Function {
+    let mut b = Builder::new();
+    let x = b.var(Var::X);
+    let y = b.var(Var::Y);
+    let r = match op {
+        Op::Unary(u, _) => b.unary(u, x),
+        Op::Binary(o, _, _) => b.binary(o, x, y),
+        Op::Powi(_, n) => b.powi(x, n),
+        other => b.push(other),
+    };
+    b.finish(r)
+}
+
+/// Every op kind, with integer powers from the extremes of i32 included
+/// (operands are placeholders for [`one_op`]).
+pub fn all_ops() -> Vec<Op> {
+    let mut ops: Vec<Op> = UNARY_OPS
+        .iter()
+        .map(|&u| Op::Unary(u, ValueId(0)))
+        .collect();
+    ops.extend(
+        BINARY_OPS
+            .iter()
+            .map(|&b| Op::Binary(b, ValueId(0), ValueId(1))),
+    );
+    for n in [
+        -17,
+        -4,
+        -3,
+        -2,
+        -1,
+        0,
+        1,
+        2,
+        3,
+        4,
+        5,
+        8,
+        13,
+        64,
+        i32::MAX,
+        i32::MIN,
+    ] {
+        ops.push(Op::Powi(ValueId(0), n));
+    }
+    ops
+}
+
+/// Bit equality with every NaN equal to every other (NaN payloads are not
+/// part of the semantics).
 pub fn same(a: f64, b: f64) -> bool {
     (a.is_nan() && b.is_nan()) || a.to_bits() == b.to_bits()
 }
@@ -179,239 +266,54 @@ pub fn random_box(rng: &mut Rng) -> [Interval; 3] {
     [side(), side(), side()]
 }
 
-/// Point values of every single-op function on edge arguments are those
-/// of the point semantics, bit for bit (NaN equal to NaN), and so are the
-/// values that come with gradients.
-pub fn check_point_ops(make: Make) {
-    for (name, f, reference) in single_op_functions() {
-        let e = make(&f);
-        for &x in &EDGE_VALUES {
-            for &y in &EDGE_VALUES {
-                let want = reference(x, y);
-                let got = e.point([x, y, 0.5]);
-                assert!(
-                    same(got, want),
-                    "{name}({x:e}, {y:e}) = {got:e}, want {want:e}"
-                );
-                let g = e.point_grad([x, y, 0.5]);
-                assert!(same(g.v, want), "{name}({x:e}, {y:e}) grad value {:e}", g.v);
-            }
-        }
+/// A point of `a` drawn at random, its finite bounds and 0 (when inside)
+/// often; NaN if `a` is empty.
+pub fn sample_random(rng: &mut Rng, a: Interval) -> f64 {
+    if a.is_empty() {
+        return f64::NAN;
+    }
+    match rng.below(6) {
+        0 if a.lo.is_finite() => a.lo,
+        1 if a.hi.is_finite() => a.hi,
+        2 if a.contains(0.0) => 0.0,
+        // No finite point ([inf, inf]): the bound itself.
+        _ if a.lo == f64::INFINITY || a.hi == f64::NEG_INFINITY => a.lo,
+        _ => sample(a, rng.unit()),
     }
 }
 
-/// Every single-op interval over edge and random boxes contains the point
-/// values at the sampled points where those are real; EMPTY only where no
-/// sampled point is real. Interval gradients give the same value interval.
-pub fn check_interval_ops(make: Make) {
-    let mut rng = Rng::new(7);
-    for (name, f, reference) in single_op_functions() {
-        let e = make(&f);
-        let mut boxes: Vec<(Interval, Interval)> = Vec::new();
-        for &(a, b) in &EDGE_INTERVALS {
-            for &(c, d) in &EDGE_INTERVALS {
-                boxes.push((Interval::new(a, b), Interval::new(c, d)));
-            }
-        }
-        for _ in 0..200 {
-            let b = random_box(&mut rng);
-            boxes.push((b[0], b[1]));
-        }
-        for (x, y) in boxes {
-            let bx = [x, y, Interval::point(0.5)];
-            let got = e.interval(bx);
-            let ig = e.interval_grad(bx);
-            assert!(
-                got == ig.v || (got.is_empty() && ig.v.is_empty()),
-                "{name} over {x:?} {y:?}: interval {got:?} but interval_grad value {:?}",
-                ig.v
-            );
-            let ts = sample_positions(&mut rng, 6);
-            for &tx in &ts {
-                for &ty in &ts {
-                    let (px, py) = (sample(x, tx), sample(y, ty));
-                    let v = reference(px, py);
-                    if v.is_finite() {
-                        assert!(
-                            got.contains(v),
-                            "{name} over {x:?} {y:?} = {got:?} misses f({px:e}, {py:e}) = {v:e}"
-                        );
-                    }
-                }
-            }
-        }
-    }
+/// A random point: mostly in [-4, 4]³, a coordinate from [`EDGE_VALUES`]
+/// now and then.
+pub fn random_point(rng: &mut Rng) -> [f64; 3] {
+    [0, 1, 2].map(|_| match rng.below(20) {
+        0 => EDGE_VALUES[rng.below(EDGE_VALUES.len())],
+        _ => rng.range(-4.0, 4.0),
+    })
 }
 
-/// Central difference of `e` along axis `k` at `p`, with step `h`.
-pub fn central_difference(e: &dyn Evaluator, p: [f64; 3], k: usize, h: f64) -> f64 {
-    let (mut a, mut b) = (p, p);
-    a[k] += h;
-    b[k] -= h;
-    (e.point(a) - e.point(b)) / (2.0 * h)
-}
-
-/// Whether `g` matches the finite differences of `e` at `p` (where the two
-/// step sizes agree with each other, i.e. `e` looks smooth there).
-/// Returns how many partials were compared.
-pub fn check_gradient_at(e: &dyn Evaluator, p: [f64; 3], what: &str) -> usize {
-    let g = e.point_grad(p);
-    let mut compared = 0;
-    for k in 0..3 {
-        let scale = p[k].abs().max(1.0);
-        let fd1 = central_difference(e, p, k, 1e-4 * scale);
-        let fd2 = central_difference(e, p, k, 1e-5 * scale);
-        if !(fd1.is_finite() && fd2.is_finite() && g.d[k].is_finite()) {
-            continue;
-        }
-        let tol = 1e-4 * fd2.abs().max(1.0);
-        if (fd1 - fd2).abs() > tol {
-            continue;
-        }
-        assert!(
-            (g.d[k] - fd2).abs() <= 10.0 * tol,
-            "{what}: ∂{k} at {p:?} is {:e}, finite differences give {fd2:e}",
-            g.d[k]
-        );
-        compared += 1;
-    }
-    compared
-}
-
-/// Gradients of every single-op function agree with central finite
-/// differences at smooth points, and lie in the interval gradients of small
-/// boxes around them.
-pub fn check_grad_ops(make: Make) {
-    let mut rng = Rng::new(11);
-    for (name, f, _) in single_op_functions() {
-        let e = make(&f);
-        let mut compared = 0;
-        for _ in 0..40 {
-            // Smooth region of every op: positive, away from 0 and from ties.
-            let x = rng.range(0.3, 3.0);
-            let y = x + rng.pick(&[-1.0, 1.0]) * rng.range(0.2, 2.0);
-            let p = [x, y.max(0.1), 0.7];
-            compared += check_gradient_at(e.as_ref(), p, &name);
-            check_interval_grad_contains(e.as_ref(), p, 1e-3, &name);
-        }
-        assert!(compared >= 40, "{name}: only {compared} partials compared");
-    }
-}
-
-/// The interval gradient over a box of half-width `r` around `p` contains
-/// the point gradient at the box's corners, centre and random points.
-pub fn check_interval_grad_contains(e: &dyn Evaluator, p: [f64; 3], r: f64, what: &str) {
-    let b = [
-        Interval::new(p[0] - r, p[0] + r),
-        Interval::new(p[1] - r, p[1] + r),
-        Interval::new(p[2] - r, p[2] + r),
-    ];
-    let ig = e.interval_grad(b);
-    let mut rng = Rng::new(p[0].to_bits());
-    for q in box_points(b, &mut rng, 4) {
-        let g = e.point_grad(q);
-        if g.v.is_finite() {
-            assert!(
-                ig.v.contains(g.v),
-                "{what}: value {:e} at {q:?} not in {:?}",
-                g.v,
-                ig.v
-            );
-        }
-        for k in 0..3 {
-            if g.d[k].is_finite() {
-                assert!(
-                    ig.d[k].contains(g.d[k]),
-                    "{what}: ∂{k} = {:e} at {q:?} not in {:?} over {b:?}",
-                    g.d[k],
-                    ig.d[k]
-                );
-            }
-        }
-    }
-}
-
-/// Random functions: point values and gradient values agree with the
-/// interpreter bit for bit; intervals and interval gradients over random
-/// boxes contain the values at points of the box where every intermediate
-/// value is real (a point where some op is undefined is outside f's domain);
-/// gradients match finite differences where f looks smooth.
-pub fn check_random_functions(make: Make, seeds: std::ops::Range<u64>) {
-    let mut rng = Rng::new(seeds.start);
-    let n_seeds = seeds.end - seeds.start;
-    let mut compared = 0;
-    for seed in seeds {
-        let f = random_function(seed, 8);
-        let e = make(&f);
-        let reference = Interpreter::new(f.clone());
-        for _ in 0..6 {
-            let b = random_box(&mut rng);
-            let got = e.interval(b);
-            let ig = e.interval_grad(b);
-            assert!(
-                got == ig.v || (got.is_empty() && ig.v.is_empty()),
-                "seed {seed}: interval {got:?} vs interval_grad {:?}",
-                ig.v
-            );
-            for q in box_points(b, &mut rng, 6) {
-                let want = Evaluator::point(&reference, q);
-                let v = e.point(q);
-                assert!(
-                    same(v, want),
-                    "seed {seed} at {q:?}: {v:e}, interpreter {want:e}"
-                );
-                let g = e.point_grad(q);
-                assert!(
-                    same(g.v, want),
-                    "seed {seed} at {q:?}: grad value {:e}",
-                    g.v
-                );
-                if !reference.point_values(q).iter().all(|v| v.is_finite()) {
-                    continue;
-                }
-                assert!(
-                    got.contains(v),
-                    "seed {seed}: f{q:?} = {v:e} not in {got:?} over {b:?}"
-                );
-                for k in 0..3 {
-                    if g.d[k].is_finite() {
-                        assert!(
-                            ig.d[k].contains(g.d[k]),
-                            "seed {seed}: ∂{k} f{q:?} = {:e} not in {:?} over {b:?}",
-                            g.d[k],
-                            ig.d[k]
-                        );
-                    }
-                }
-            }
-        }
-        for _ in 0..3 {
-            let p = [
-                rng.range(-2.0, 2.0),
-                rng.range(-2.0, 2.0),
-                rng.range(-2.0, 2.0),
-            ];
-            if reference
-                .point_values(p)
-                .iter()
-                .all(|v| v.is_finite() && v.abs() < 1e6)
-            {
-                compared += check_gradient_at(e.as_ref(), p, &format!("seed {seed}"));
-            }
-        }
-    }
-    // Many random functions are undefined or non-smooth at random points;
-    // enough of them must still be compared for the check to mean anything.
-    assert!(
-        compared as u64 >= n_seeds / 2,
-        "only {compared} partials compared with finite differences over {n_seeds} functions"
+/// The `ibeam` binary run with `args` in the crate root; fails the test if
+/// it panicked (exit code 101), which no input may cause.
+pub fn ibeam(args: &[&str]) -> Output {
+    let out = Command::new(env!("CARGO_BIN_EXE_ibeam"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("run ibeam");
+    assert_ne!(
+        out.status.code(),
+        Some(101),
+        "ibeam {args:?} panicked:\n{}",
+        String::from_utf8_lossy(&out.stderr)
     );
+    out
 }
 
-/// The whole suite.
-pub fn conformance(make: Make) {
-    check_point_ops(make);
-    check_interval_ops(make);
-    check_grad_ops(make);
-    check_random_functions(make, 0..300);
+/// The standard output of a run, as text.
+pub fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+/// The standard error of a run, as text.
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
 }

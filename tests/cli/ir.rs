@@ -4,24 +4,10 @@
 use ibeam::ir::passes::simplify;
 use ibeam::ir::print::print;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn ibeam(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ibeam"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("ibeam runs")
-}
+use crate::common::{ibeam, stderr, stdout};
 
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
+/// Every `.ib` file of examples/, sorted.
 fn examples() -> Vec<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
     let mut files: Vec<PathBuf> = std::fs::read_dir(dir)

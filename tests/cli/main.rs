@@ -1,9 +1,15 @@
 //! End-to-end tests of the `ibeam` binary: `ibeam render` on the examples
 //! writes PNGs, and every load or argument error exits with a message on
-//! stderr and a non-zero code, never a panic (exit code 101).
+//! stderr and a non-zero code, never a panic (exit code 101); `ibeam ir`
+//! and `ibeam eval` in [`ir`]. One test binary.
 
+#[path = "../common/mod.rs"]
+mod common;
+mod ir;
+
+use common::{ibeam, stderr};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 /// The evaluator flag every render here uses (one place, so the JIT
 /// variants can be added beside it).
@@ -16,28 +22,11 @@ fn scratch(test: &str) -> PathBuf {
     d
 }
 
+/// The path of examples/`name`.
 fn example(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("examples")
         .join(name)
-}
-
-fn ibeam(args: &[&str]) -> Output {
-    let out = Command::new(env!("CARGO_BIN_EXE_ibeam"))
-        .args(args)
-        .output()
-        .expect("run ibeam");
-    assert_ne!(
-        out.status.code(),
-        Some(101),
-        "ibeam {args:?} panicked:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 /// Renders `scene` to `out` with the usual test flags plus `extra`.

@@ -1,0 +1,190 @@
+//! Lights and shadows, bad inputs, and per-tile pruning.
+
+use super::*;
+
+#[test]
+fn a_light_inside_an_object_lights_nothing() {
+    let light_pos = [1.3, 1.3, 1.3];
+    let mk = |shadows: bool| {
+        let sc = scene(
+            2,
+            Camera::default(),
+            vec![Light {
+                kind: LightKind::Point(light_pos),
+                color: [1.0; 3],
+                shadows,
+            }],
+        );
+        let ev: Vec<Arc<dyn Evaluator>> = vec![
+            sphere(),
+            Arc::new(Sphere {
+                c: light_pos,
+                r2: 0.04,
+            }),
+        ];
+        run(&sc, ev, &opts(40, 40, Method::Beam))
+    };
+    let sc = scene(2, Camera::default(), vec![]);
+    let ambient: Vec<_> = sc
+        .objects
+        .iter()
+        .map(|o| srgb_pixel(o.color.map(|c| c * AMBIENT)))
+        .collect();
+    let dark = mk(true);
+    let lit = mk(false);
+    let mut brighter = 0;
+    for k in 0..dark.hit_mask.len() {
+        if dark.hit_mask[k] {
+            let (x, y) = ((k % 40) as u32, (k / 40) as u32);
+            assert!(ambient.contains(dark.image.get_pixel(x, y)), "pixel {k}");
+            if !ambient.contains(lit.image.get_pixel(x, y)) {
+                brighter += 1;
+            }
+        }
+    }
+    assert!(brighter > 100, "{brighter}");
+}
+
+#[test]
+fn shadows_fall_where_an_occluder_blocks_the_light() {
+    let cam = Camera {
+        eye: [0.0, 5.0, 0.0],
+        target: [0.0, 0.0, 0.0],
+        up: [0.0, 0.0, 1.0],
+        projection: Projection::Orthographic { width: 4.0 },
+    };
+    let light = Light {
+        kind: LightKind::Directional([1.0, -1.0, 0.0]),
+        color: [1.0; 3],
+        shadows: true,
+    };
+    let sc = scene(2, cam, vec![light]);
+    let ev: Vec<Arc<dyn Evaluator>> = vec![
+        Arc::new(Sphere {
+            c: [0.0; 3],
+            r2: 0.49,
+        }),
+        Arc::new(Ground { axis: 1, h: -1.0 }),
+    ];
+    let (w, h) = (40, 40);
+    let out = run(&sc, ev, &opts(w, h, Method::Beam));
+    let rc = RayCamera::new(&sc.camera, w, h).unwrap();
+    let pixel_at = |x: f64, z: f64| {
+        (0..w * h)
+            .min_by(|&a, &b| {
+                let d = |k: u32| {
+                    let o = rc.pixel_ray(k % w, k / w).om;
+                    (o[0] - x).powi(2) + (o[2] - z).powi(2)
+                };
+                d(a).total_cmp(&d(b))
+            })
+            .unwrap()
+    };
+    let ground_ambient = srgb_pixel(sc.objects[1].color.map(|c| c * AMBIENT));
+    let shadowed = pixel_at(1.0, 0.0);
+    let lit = pixel_at(-1.2, 0.0);
+    assert_eq!(
+        *out.image.get_pixel(shadowed % w, shadowed / w),
+        ground_ambient
+    );
+    assert_ne!(*out.image.get_pixel(lit % w, lit / w), ground_ambient);
+    assert!(out.stats.shadow_rays_saved > 0);
+}
+
+#[test]
+fn bad_inputs_are_errors() {
+    let mut sc = scene(1, Camera::default(), vec![]);
+    sc.camera.target = sc.camera.eye;
+    assert!(matches!(
+        render(&sc, &[sphere()], &opts(8, 8, Method::Beam)),
+        Err(RenderError::Camera(_))
+    ));
+    let mut sc = scene(1, Camera::default(), vec![]);
+    sc.camera.up = [3.0, 2.5, 4.0];
+    assert!(matches!(
+        render(&sc, &[sphere()], &opts(8, 8, Method::Beam)),
+        Err(RenderError::Camera(_))
+    ));
+    let sc = scene(1, Camera::default(), vec![]);
+    assert!(matches!(
+        render(&sc, &[sphere()], &opts(0, 8, Method::Beam)),
+        Err(RenderError::BadSize(0, 8))
+    ));
+    assert!(matches!(
+        render(&sc, &[sphere()], &opts(8, 20000, Method::Beam)),
+        Err(RenderError::BadSize(..))
+    ));
+    assert!(matches!(
+        render(&sc, &[], &opts(8, 8, Method::Beam)),
+        Err(RenderError::EvaluatorCount { .. })
+    ));
+    let sc = scene(0, Camera::default(), vec![]);
+    assert!(matches!(
+        render(&sc, &[], &opts(8, 8, Method::Beam)),
+        Err(RenderError::NoObjects)
+    ));
+}
+
+/// Per-tile pruning (`ir::prune`) changes how large functions are
+/// evaluated, not what is drawn: a 2D model of 36 discs (a CSG union of
+/// about 200 ops, seen along z), the prospero model (2D) and the
+/// colonnade model (3D) render the same hit mask and the same hit depths
+/// with and without it, and pruning did happen.
+#[test]
+fn pruning_draws_what_the_whole_function_draws() {
+    let mut text = String::from("object s = ");
+    let n = 36;
+    for i in 0..n {
+        let (x, y) = (
+            f64::from(i % 6) * 0.45 - 1.125,
+            f64::from(i / 6) * 0.45 - 1.125,
+        );
+        let disc = format!("sqrt((x - {x})^2 + (y - {y})^2) - 0.1");
+        if i + 1 < n {
+            text.push_str(&format!("union({disc}, "));
+        } else {
+            text.push_str(&disc);
+        }
+    }
+    text.push_str(&")".repeat(n as usize - 1));
+    text.push_str(
+        ";\ncamera { eye = (0, 0, 5); target = (0, 0, 0); ortho = 3; }\n\
+         bounds = (-1.5, -1.5, -1) .. (1.5, 1.5, 1);\n",
+    );
+    let mut scenes = vec![ibeam::lang::load_scene_source("discs.ib", &text).unwrap()];
+    // The community models, when ../shared is beside the checkout: prospero
+    // (2D) and colonnade (3D, pruned per block near the surface).
+    for model in ["prospero", "colonnade"] {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join(format!("../shared/models/{model}.vm"));
+        if let Ok(s) = ibeam::lang::load_scene(&path) {
+            scenes.push(s);
+        }
+    }
+    for sc in &scenes {
+        let evals = ibeam::eval::build_evaluators(sc, ibeam::eval::EvalKind::Jit).unwrap();
+        assert!(evals[0].function().unwrap().live_count() >= 64);
+        let size = if scenes.len() > 2 && std::ptr::eq(sc, &scenes[2]) {
+            128
+        } else {
+            384
+        };
+        let mut o = opts(size, size, Method::Beam);
+        let pruned = run(sc, evals.clone(), &o);
+        o.prune = false;
+        let whole = run(sc, evals, &o);
+        assert!(pruned.stats.pruned_ops_after > 0, "nothing was pruned");
+        assert!(pruned.stats.pruned_ops_after * 2 <= pruned.stats.pruned_ops_before);
+        assert_eq!(whole.stats.pruned_ops_before, 0);
+        assert_eq!(pruned.hit_mask, whole.hit_mask);
+        // Point values agree bit for bit, but a block that prunes decides
+        // its beam tests on tighter intervals, so a root may be refined
+        // from another bracket: depths agree to the refinement tolerance.
+        for (a, b) in pruned.depth_t.iter().zip(&whole.depth_t) {
+            assert!(
+                a == b || (a - b).abs() <= 1e-9 * a.abs(),
+                "depth {a} against {b}"
+            );
+        }
+    }
+}
