@@ -43,34 +43,68 @@ fn interval() -> impl Strategy<Value = Interval> {
     })
 }
 
-fn to_inari(i: Interval) -> inari::Interval {
-    inari::Interval::try_from((i.lo, i.hi)).expect("valid interval")
-}
+/// The inari oracle. inari needs AVX and FMA on x86-64 at compile time, so
+/// it is a dev-dependency only where the target has them (`.ci/run`
+/// builds with `-C target-cpu=haswell`); a baseline build leaves it out.
+#[cfg(any(
+    target_arch = "aarch64",
+    all(target_arch = "x86_64", target_feature = "avx", target_feature = "fma")
+))]
+mod oracle {
+    use super::*;
 
-fn down2(v: f64) -> f64 {
-    v.next_down().next_down()
-}
-
-fn up2(v: f64) -> f64 {
-    v.next_up().next_up()
-}
-
-/// Ours contains inari's tightest result and is at most 2 ulps wider on
-/// each side.
-fn assert_tight(ours: Interval, theirs: inari::Interval, what: &str) {
-    if theirs.is_empty() {
-        assert!(ours.is_empty(), "{what}: {ours:?}, inari EMPTY");
-        return;
+    fn to_inari(i: Interval) -> inari::Interval {
+        inari::Interval::try_from((i.lo, i.hi)).expect("valid interval")
     }
-    let (lo, hi) = (theirs.inf(), theirs.sup());
-    assert!(
-        ours.lo <= lo && hi <= ours.hi,
-        "{what}: {ours:?} does not contain inari's [{lo:e}, {hi:e}]"
-    );
-    assert!(
-        ours.lo >= down2(lo) && ours.hi <= up2(hi),
-        "{what}: {ours:?} much wider than inari's [{lo:e}, {hi:e}]"
-    );
+
+    fn down2(v: f64) -> f64 {
+        v.next_down().next_down()
+    }
+
+    fn up2(v: f64) -> f64 {
+        v.next_up().next_up()
+    }
+
+    /// Ours contains inari's tightest result and is at most 2 ulps wider on
+    /// each side.
+    fn assert_tight(ours: Interval, theirs: inari::Interval, what: &str) {
+        if theirs.is_empty() {
+            assert!(ours.is_empty(), "{what}: {ours:?}, inari EMPTY");
+            return;
+        }
+        let (lo, hi) = (theirs.inf(), theirs.sup());
+        assert!(
+            ours.lo <= lo && hi <= ours.hi,
+            "{what}: {ours:?} does not contain inari's [{lo:e}, {hi:e}]"
+        );
+        assert!(
+            ours.lo >= down2(lo) && ours.hi <= up2(hi),
+            "{what}: {ours:?} much wider than inari's [{lo:e}, {hi:e}]"
+        );
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig {
+            cases: 2000,
+            failure_persistence: None,
+            ..ProptestConfig::default()
+        })]
+
+        #[test]
+        fn arithmetic_matches_inari(a in interval(), b in interval()) {
+            let (ia, ib) = (to_inari(a), to_inari(b));
+            assert_tight(a.add(b), ia + ib, &format!("{a:?} + {b:?}"));
+            assert_tight(a.sub(b), ia - ib, &format!("{a:?} - {b:?}"));
+            assert_tight(a.mul(b), ia * ib, &format!("{a:?} * {b:?}"));
+            assert_tight(a.div(b), ia / ib, &format!("{a:?} / {b:?}"));
+            assert_tight(a.min(b), ia.min(ib), &format!("min {a:?} {b:?}"));
+            assert_tight(a.max(b), ia.max(ib), &format!("max {a:?} {b:?}"));
+            assert_tight(a.sqrt(), ia.sqrt(), &format!("sqrt {a:?}"));
+            assert_tight(a.square(), ia.sqr(), &format!("square {a:?}"));
+            assert_tight(a.abs(), ia.abs(), &format!("abs {a:?}"));
+            assert_tight(a.neg(), -ia, &format!("neg {a:?}"));
+        }
+    }
 }
 
 proptest! {
@@ -79,21 +113,6 @@ proptest! {
         failure_persistence: None,
         ..ProptestConfig::default()
     })]
-
-    #[test]
-    fn arithmetic_matches_inari(a in interval(), b in interval()) {
-        let (ia, ib) = (to_inari(a), to_inari(b));
-        assert_tight(a.add(b), ia + ib, &format!("{a:?} + {b:?}"));
-        assert_tight(a.sub(b), ia - ib, &format!("{a:?} - {b:?}"));
-        assert_tight(a.mul(b), ia * ib, &format!("{a:?} * {b:?}"));
-        assert_tight(a.div(b), ia / ib, &format!("{a:?} / {b:?}"));
-        assert_tight(a.min(b), ia.min(ib), &format!("min {a:?} {b:?}"));
-        assert_tight(a.max(b), ia.max(ib), &format!("max {a:?} {b:?}"));
-        assert_tight(a.sqrt(), ia.sqrt(), &format!("sqrt {a:?}"));
-        assert_tight(a.square(), ia.sqr(), &format!("square {a:?}"));
-        assert_tight(a.abs(), ia.abs(), &format!("abs {a:?}"));
-        assert_tight(a.neg(), -ia, &format!("neg {a:?}"));
-    }
 
     #[test]
     fn every_op_contains_sampled_points(
