@@ -69,6 +69,43 @@ fn deep_call_chains_are_limited() {
 }
 
 #[test]
+fn long_let_chains_load_and_evaluate() {
+    // As SSA exporters write them: each let reads the one before.
+    let mut src = String::from("let v0 = x * x + y * y + z * z - 1;\n");
+    let n = 10_000;
+    for i in 1..=n {
+        src.push_str(&format!(
+            "let v{i} = v{} + 0.0001 * sin(x * {});\n",
+            i - 1,
+            i % 7 + 1
+        ));
+    }
+    src.push_str(&format!("object o = v{n};"));
+    let scene = load_scene_source("chain.ib", &src).unwrap();
+    let it = Interpreter::new(scene.objects[0].function.clone());
+    let p = [0.5, 0.5, 0.5];
+    let expected = (1..=n).fold(0.75 - 1.0, |v, i| {
+        v + 0.0001 * (0.5 * f64::from(i % 7 + 1)).sin()
+    });
+    assert!(
+        (it.point(p) - expected).abs() < 1e-9,
+        "{} vs {expected}",
+        it.point(p)
+    );
+}
+
+#[test]
+fn long_let_chains_still_refuse_recursion() {
+    let mut src = String::from("let v0 = v100 + x;\n");
+    for i in 1..=100 {
+        src.push_str(&format!("let v{i} = v{} + 1;\n", i - 1));
+    }
+    src.push_str("object o = v100;");
+    let e = err(&src);
+    assert!(e.message.contains("recursive"), "{e}");
+}
+
+#[test]
 fn exponential_inlining_is_cut_off() {
     // each level uses the one below twice with distinct call sites: the
     // inlined size doubles per level; lowering must stop, not hang

@@ -103,10 +103,15 @@ impl Terms {
     /// coefficient other than ±1, a neg when every term is negative) is
     /// smaller than the old one, so simplification never grows a function.
     fn pays(&self) -> bool {
+        // A product by 0 leaves no term at all (`flatten` drops zero
+        // factors); such a tree has nothing to merge.
+        if !self.merged || self.entries.is_empty() {
+            return false;
+        }
         let scaled = self.entries.iter().filter(|e| e.1.abs() != 1.0).count();
         let all_negative = self.entries.iter().all(|e| e.1 < 0.0);
         let rebuilt = self.entries.len() - 1 + 2 * scaled + usize::from(all_negative);
-        self.merged && rebuilt < self.nodes
+        rebuilt < self.nodes
     }
 }
 
@@ -273,6 +278,17 @@ mod tests {
             .filter(|o| matches!(o, Op::Binary(BinaryOp::Mul, ..)))
             .count();
         assert_eq!(muls, 2, "{f:?}");
+    }
+
+    #[test]
+    fn a_product_by_zero_is_left_alone() {
+        // Found by fuzzing: 0·y has no term after zero factors are dropped.
+        let mut b = Builder::new();
+        let y = b.var(Var::Y);
+        let zero = b.constant(0.0);
+        let p = b.binary(BinaryOp::Mul, zero, y);
+        let f = b.finish(p);
+        assert_eq!(collect_terms(&f), f);
     }
 
     #[test]

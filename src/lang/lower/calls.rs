@@ -105,7 +105,7 @@ impl<'p, 'a> Lowerer<'p, 'a> {
     }
 
     /// Inlines a `let` or `fn` with the given (unevaluated) arguments.
-    fn expand(
+    pub(super) fn expand(
         &mut self,
         def: &'p Def<'a>,
         args: &'a [Expr],

@@ -88,7 +88,7 @@ pub(in crate::lang) struct Lowerer<'p, 'a> {
     pub(super) def_memo: HashMap<(usize, Env), Val>,
     pub(super) thunk_memo: HashMap<(usize, Env), Val>,
     pub(super) next_thunk: usize,
-    steps: u64,
+    pub(super) steps: u64,
     recursion: usize,
 }
 

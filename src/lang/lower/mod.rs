@@ -27,7 +27,7 @@ mod expr;
 pub(in crate::lang) use expr::{Coord, Ctx, Env, Lowerer, Val, int_exponent};
 
 use crate::ir::{Function, Op, Var};
-use crate::lang::ast::{Expr, Ident, Item};
+use crate::lang::ast::{Expr, ExprKind, Ident, Item};
 use crate::lang::builtins::Builtin;
 use crate::lang::diag::Diag;
 use expr::IDENTITY;
@@ -66,7 +66,17 @@ struct Def<'a> {
 #[derive(Debug)]
 pub struct Program<'a> {
     defs: HashMap<&'a str, Def<'a>>,
+    /// The `let`s another `let` reads, in source order, when there are more
+    /// than [`CHAIN_PREWARM`] of them (see [`Program::prewarm`]).
+    chain: Vec<&'a str>,
 }
+
+/// Chains of `let`s longer than this are lowered in source order before an
+/// object, so that a use deep in the chain finds its operands already
+/// lowered instead of inlining thousands of definitions inside one another.
+/// Shorter chains are lowered where used, as written (which keeps the op
+/// order of ordinary scenes).
+pub const CHAIN_PREWARM: usize = 64;
 
 impl<'a> Program<'a> {
     /// Collects the `let` and `fn` items of each `(source, items)` pair.
@@ -123,12 +133,30 @@ impl<'a> Program<'a> {
                 );
             }
         }
-        Ok(Program { defs })
+        let chain = let_chain(&defs);
+        Ok(Program { defs, chain })
+    }
+
+    /// Lowers the long `let` chain (if any) in source order, so each `let`
+    /// reads memoised values of the ones before it. SSA exports write
+    /// `let v1 = …; let v2 = v1 + …;` thousands deep, which inlining where
+    /// used would nest past [`MAX_CALL_DEPTH`]. Errors are left for the
+    /// use that needs the value to report; the steps spent here do not
+    /// count against the object (each expansion still stops at
+    /// [`MAX_STEPS`]).
+    fn prewarm<'p>(&'p self, l: &mut Lowerer<'p, 'a>) {
+        let steps = l.steps;
+        for name in &self.chain {
+            let def = &self.defs[name];
+            let _ = l.expand(def, &[], def.name.span, &Ctx::top(def.src), IDENTITY);
+        }
+        l.steps = steps;
     }
 
     /// Lowers `body` (from source `src`) to a function of x, y, z.
     pub fn lower(&self, body: &Expr, src: usize) -> Result<Function, Diag> {
         let mut l = Lowerer::new(self);
+        self.prewarm(&mut l);
         let ctx = Ctx::top(src);
         let v = l.lower(body, &ctx, IDENTITY)?;
         match v {
@@ -149,6 +177,7 @@ impl<'a> Program<'a> {
     /// constant op).
     pub fn lower_any(&self, body: &Expr, src: usize) -> Result<Function, Diag> {
         let mut l = Lowerer::new(self);
+        self.prewarm(&mut l);
         let ctx = Ctx::top(src);
         let v = l.lower(body, &ctx, IDENTITY)?;
         let root = l.node(v);
@@ -178,6 +207,39 @@ impl<'a> Program<'a> {
             .chain(Builtin::ALL.iter().map(|b| (b.name(), true)))
             .chain(COORDS.iter().map(|(n, _)| (*n, false)))
     }
+}
+
+/// The parameterless `let`s named in the body of another parameterless
+/// `let`, in source order, when there are more than [`CHAIN_PREWARM`].
+fn let_chain<'a>(defs: &HashMap<&'a str, Def<'a>>) -> Vec<&'a str> {
+    let mut read: Vec<&Def<'a>> = Vec::new();
+    let mut seen = std::collections::HashSet::new();
+    for def in defs.values().filter(|d| d.params.is_none()) {
+        let mut stack = vec![def.body];
+        while let Some(e) = stack.pop() {
+            match &e.kind {
+                ExprKind::Name(n) => {
+                    if let Some(d) = defs.get(n.as_str())
+                        && d.params.is_none()
+                        && seen.insert(d.id)
+                    {
+                        read.push(d);
+                    }
+                }
+                ExprKind::Num(_) => {}
+                ExprKind::Call { args, .. } => stack.extend(args),
+                ExprKind::Neg(a) => stack.push(a),
+                ExprKind::Pow(a, b) => stack.extend([a.as_ref(), b.as_ref()]),
+                ExprKind::Sum(ts) => stack.extend(ts.iter().map(|(_, t)| t)),
+                ExprKind::Product(fs) => stack.extend(fs.iter().map(|(_, f)| f)),
+            }
+        }
+    }
+    if read.len() <= CHAIN_PREWARM {
+        return Vec::new();
+    }
+    read.sort_by_key(|d| d.id);
+    read.iter().map(|d| d.name.name.as_str()).collect()
 }
 
 fn check_definable(src: usize, name: &Ident, what: &str) -> Result<(), Diag> {
