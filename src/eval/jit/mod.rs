@@ -33,6 +33,7 @@
 //! `regalloc_algorithm`, default `backtracking`); see the README's
 //! performance notes for what they measured.
 
+mod derive;
 mod emit;
 mod lower;
 #[allow(unsafe_code)] // the one module that calls JIT code and frees its memory
@@ -248,7 +249,7 @@ fn build(
         }
         Kind::PointGrad => {
             let mut e = Emitter::new(&mut b, shims, int_select);
-            let (v, d) = lower::grad(&mut e, f, live, [params[0], params[1], params[2]]);
+            let (v, d) = derive::grad(&mut e, f, live, [params[0], params[1], params[2]]);
             let out = params[3];
             e.store(v, out, 0);
             for (k, dk) in d.into_iter().enumerate() {
@@ -267,7 +268,7 @@ fn build(
         Kind::IntervalGrad => {
             let mut e = Emitter::new(&mut b, shims, int_select);
             let bx = load_box(&mut e, params[0]);
-            let (v, d) = lower::grad(&mut e, f, live, bx);
+            let (v, d) = derive::grad(&mut e, f, live, bx);
             let out = params[1];
             e.iv_store(v, out, 0);
             for (k, dk) in d.into_iter().enumerate() {
@@ -280,7 +281,7 @@ fn build(
             let mut e = Emitter::new(&mut b, shims, int_select);
             let bx = load_box(&mut e, params[0]);
             let dir = [0, 1, 2].map(|k| e.iv_load(params[0], 48 + 16 * k));
-            let (v, d) = lower::directional(&mut e, f, live, bx, dir);
+            let (v, d) = derive::directional(&mut e, f, live, bx, dir);
             let out = params[1];
             e.iv_store(v, out, 0);
             let d = d.unwrap_or_else(|| e.iv_const(0.0));
