@@ -8,7 +8,8 @@
 
 use cranelift_codegen::ir::{InstBuilder, StackSlotData, StackSlotKind, Value, types};
 
-use super::emit::{Emitter, Iv, binary_shim_index, unary_shim_index};
+use super::emit::{Emitter, Iv};
+use super::shims::Shim;
 use crate::ir::{BinaryOp, Function, Op, UnaryOp};
 
 /// Which ops the root depends on (by index).
@@ -210,8 +211,8 @@ pub(crate) fn point_unary(e: &mut Emitter, u: UnaryOp, a: Value) -> Value {
         UnaryOp::Square => e.mul(a, a),
         UnaryOp::Sqrt => e.b.ins().sqrt(a),
         UnaryOp::Exp | UnaryOp::Ln | UnaryOp::Sin | UnaryOp::Cos => {
-            let i = unary_shim_index(u).expect("transcendental");
-            e.call_point_unary(i, a)
+            let (shim, _) = Shim::of_unary(u).expect("transcendental");
+            e.call_point_unary(shim, a)
         }
     }
 }
@@ -225,8 +226,8 @@ pub(crate) fn point_binary(e: &mut Emitter, op: BinaryOp, a: Value, b: Value) ->
         BinaryOp::Min => e.min_nan(a, b),
         BinaryOp::Max => e.max_nan(a, b),
         BinaryOp::Atan2 | BinaryOp::Pow => {
-            let i = binary_shim_index(op).expect("transcendental");
-            e.call_point_binary(i, a, b)
+            let (shim, _) = Shim::of_binary(op).expect("transcendental");
+            e.call_point_binary(shim, a, b)
         }
     }
 }
@@ -265,8 +266,8 @@ pub(crate) fn iv_unary(e: &mut Emitter, u: UnaryOp, a: Iv) -> Iv {
         UnaryOp::Square => e.iv_square(a),
         UnaryOp::Sqrt => e.iv_sqrt(a),
         UnaryOp::Exp | UnaryOp::Ln | UnaryOp::Sin | UnaryOp::Cos => {
-            let i = unary_shim_index(u).expect("transcendental");
-            e.call_iv_unary(i, a)
+            let (_, shim) = Shim::of_unary(u).expect("transcendental");
+            e.call_iv_unary(shim, a)
         }
     }
 }
@@ -280,8 +281,8 @@ pub(crate) fn iv_binary(e: &mut Emitter, op: BinaryOp, a: Iv, b: Iv) -> Iv {
         BinaryOp::Min => e.iv_min(a, b),
         BinaryOp::Max => e.iv_max(a, b),
         BinaryOp::Atan2 | BinaryOp::Pow => {
-            let i = binary_shim_index(op).expect("transcendental");
-            e.call_iv_binary(i, a, b)
+            let (_, shim) = Shim::of_binary(op).expect("transcendental");
+            e.call_iv_binary(shim, a, b)
         }
     }
 }
