@@ -12,8 +12,183 @@ use crate::eval::{Evaluator, Grad, IntervalGrad};
 use crate::interval::Interval;
 use crate::ir::semantics::*;
 use crate::ir::validate::{InvalidIr, debug_validate, validate};
-use crate::ir::{Function, Op};
+use crate::ir::{BinaryOp, Function, Op, UnaryOp};
 use std::cell::RefCell;
+
+/// The interpreter's [`Arith`]: plain f64 and [`Interval`] arithmetic.
+struct Reference;
+
+/// `n` as the interpreter's i32 exponent; only `i32::MIN - 1` (the
+/// derivative of `powi(_, i32::MIN)`) is out of range, and wraps as the
+/// i32 arithmetic before the shared rules did.
+fn exponent(n: i64) -> i32 {
+    n as i32
+}
+
+impl Arith<f64> for Reference {
+    fn konst(&mut self, c: f64) -> f64 {
+        c
+    }
+    fn add(&mut self, a: f64, b: f64) -> f64 {
+        a + b
+    }
+    fn sub(&mut self, a: f64, b: f64) -> f64 {
+        a - b
+    }
+    fn mul(&mut self, a: f64, b: f64) -> f64 {
+        a * b
+    }
+    fn div(&mut self, a: f64, b: f64) -> f64 {
+        a / b
+    }
+    fn neg(&mut self, a: f64) -> f64 {
+        -a
+    }
+    fn unary(&mut self, op: UnaryOp, a: f64) -> f64 {
+        point_unary(op, a)
+    }
+    fn binary(&mut self, op: BinaryOp, a: f64, b: f64) -> f64 {
+        point_binary(op, a, b)
+    }
+    fn powi(&mut self, a: f64, n: i64) -> f64 {
+        point_powi(a, exponent(n))
+    }
+    fn keep_zero(&mut self, t: f64, x: f64) -> f64 {
+        if t == 0.0 { 0.0 } else { x }
+    }
+    fn abs_grad(&mut self, a: f64, x: f64) -> f64 {
+        let s = if a > 0.0 {
+            1.0
+        } else if a < 0.0 {
+            -1.0
+        } else if a == 0.0 {
+            0.0
+        } else {
+            f64::NAN
+        };
+        self.chain(s, x)
+    }
+    fn min_grad(&mut self, a: f64, b: f64, x: f64, y: f64) -> f64 {
+        if a.is_nan() || b.is_nan() {
+            f64::NAN
+        } else if a < b {
+            x
+        } else {
+            y
+        }
+    }
+    fn max_grad(&mut self, a: f64, b: f64, x: f64, y: f64) -> f64 {
+        if a.is_nan() || b.is_nan() {
+            f64::NAN
+        } else if a > b {
+            x
+        } else {
+            y
+        }
+    }
+}
+
+impl Arith<Interval> for Reference {
+    fn konst(&mut self, c: f64) -> Interval {
+        Interval::point(c)
+    }
+    fn add(&mut self, a: Interval, b: Interval) -> Interval {
+        a.add(b)
+    }
+    fn sub(&mut self, a: Interval, b: Interval) -> Interval {
+        a.sub(b)
+    }
+    fn mul(&mut self, a: Interval, b: Interval) -> Interval {
+        a.mul(b)
+    }
+    fn div(&mut self, a: Interval, b: Interval) -> Interval {
+        a.div(b)
+    }
+    fn neg(&mut self, a: Interval) -> Interval {
+        a.neg()
+    }
+    fn unary(&mut self, op: UnaryOp, a: Interval) -> Interval {
+        interval_unary(op, a)
+    }
+    fn binary(&mut self, op: BinaryOp, a: Interval, b: Interval) -> Interval {
+        interval_binary(op, a, b)
+    }
+    fn powi(&mut self, a: Interval, n: i64) -> Interval {
+        a.powi(exponent(n))
+    }
+    fn abs_grad(&mut self, a: Interval, x: Interval) -> Interval {
+        let s = if a.is_empty() {
+            Interval::EMPTY
+        } else if a.lo > 0.0 {
+            Interval::point(1.0)
+        } else if a.hi < 0.0 {
+            Interval::point(-1.0)
+        } else if a.lo == 0.0 && a.hi == 0.0 {
+            Interval::point(0.0)
+        } else if a.lo == 0.0 {
+            Interval::new(0.0, 1.0)
+        } else if a.hi == 0.0 {
+            Interval::new(-1.0, 0.0)
+        } else {
+            Interval::new(-1.0, 1.0)
+        };
+        s.mul(x)
+    }
+    fn min_grad(&mut self, a: Interval, b: Interval, x: Interval, y: Interval) -> Interval {
+        // The op returns a's value at every point of the box when a.hi < b.lo.
+        pick_operand(a, b, a.hi < b.lo, b.hi <= a.lo, x, y)
+    }
+    fn max_grad(&mut self, a: Interval, b: Interval, x: Interval, y: Interval) -> Interval {
+        pick_operand(a, b, a.lo > b.hi, b.lo >= a.hi, x, y)
+    }
+    fn atan2_cut(
+        &mut self,
+        a: Interval,
+        b: Interval,
+        x: Option<Interval>,
+        y: Option<Interval>,
+        d: Interval,
+    ) -> Interval {
+        if !(b.lo <= 0.0 && a.lo <= 0.0 && 0.0 <= a.hi) {
+            return d;
+        }
+        let zero = |x: Option<Interval>| x.is_none_or(|x| x.lo == 0.0 && x.hi == 0.0);
+        if zero(x) && zero(y) {
+            Interval::point(0.0)
+        } else {
+            Interval::ENTIRE
+        }
+    }
+    fn ln_deriv_arg(&mut self, a: Interval) -> Interval {
+        if a.is_empty() || a.hi < 0.0 {
+            Interval::EMPTY
+        } else {
+            Interval::new(a.lo.max(0.0), a.hi)
+        }
+    }
+}
+
+/// The derivative of min or max over a box: `x` where the op returns a
+/// everywhere (`first`), `y` where it returns b everywhere, else the hull.
+fn pick_operand(
+    a: Interval,
+    b: Interval,
+    first: bool,
+    second: bool,
+    x: Interval,
+    y: Interval,
+) -> Interval {
+    // The op's value is EMPTY exactly when an operand is.
+    if a.is_empty() || b.is_empty() {
+        Interval::EMPTY
+    } else if first {
+        x
+    } else if second {
+        y
+    } else {
+        x.hull(y)
+    }
+}
 
 /// The reference evaluator: walks the op list once per evaluation.
 #[derive(Clone, Debug)]
@@ -70,6 +245,30 @@ impl Interpreter {
     }
 }
 
+// The interpreter knows no partial to be 0 before evaluating it: every
+// partial is `Some` going in, and a `None` coming out (powi(_, 0)) is 0.
+fn dual(g: Grad) -> Dual<f64> {
+    (g.v, g.d.map(Some))
+}
+
+fn from_dual((v, d): Dual<f64>) -> Grad {
+    Grad {
+        v,
+        d: d.map(|x| x.unwrap_or(0.0)),
+    }
+}
+
+fn idual(g: IntervalGrad) -> Dual<Interval> {
+    (g.v, g.d.map(Some))
+}
+
+fn from_idual((v, d): Dual<Interval>) -> IntervalGrad {
+    IntervalGrad {
+        v,
+        d: d.map(|x| x.unwrap_or(Interval::point(0.0))),
+    }
+}
+
 fn run_grad(ops: &[Op], p: [f64; 3], vals: &mut Vec<Grad>) {
     vals.clear();
     for op in ops {
@@ -83,9 +282,15 @@ fn run_grad(ops: &[Op], p: [f64; 3], vals: &mut Vec<Grad>) {
                 }
             }
             Op::Const(c) => Grad { v: c, d: [0.0; 3] },
-            Op::Unary(u, a) => grad_unary(u, vals[a.index()]),
-            Op::Binary(o, a, b) => grad_binary(o, vals[a.index()], vals[b.index()]),
-            Op::Powi(a, n) => grad_powi(vals[a.index()], n),
+            Op::Unary(u, a) => from_dual(grad_unary(&mut Reference, u, dual(vals[a.index()]))),
+            Op::Binary(o, a, b) => {
+                let (a, b) = (dual(vals[a.index()]), dual(vals[b.index()]));
+                from_dual(grad_binary(&mut Reference, o, a, b))
+            }
+            Op::Powi(a, n) => {
+                let a = dual(vals[a.index()]);
+                from_dual(grad_powi(&mut Reference, a, i64::from(n)))
+            }
         };
         vals.push(v);
     }
@@ -106,9 +311,15 @@ fn run_igrad(ops: &[Op], b: [Interval; 3], seed: [[Interval; 3]; 3], vals: &mut 
                 v: Interval::point(c),
                 d: [Interval::point(0.0); 3],
             },
-            Op::Unary(u, a) => igrad_unary(u, vals[a.index()]),
-            Op::Binary(o, x, y) => igrad_binary(o, vals[x.index()], vals[y.index()]),
-            Op::Powi(a, n) => igrad_powi(vals[a.index()], n),
+            Op::Unary(u, a) => from_idual(grad_unary(&mut Reference, u, idual(vals[a.index()]))),
+            Op::Binary(o, x, y) => {
+                let (a, b) = (idual(vals[x.index()]), idual(vals[y.index()]));
+                from_idual(grad_binary(&mut Reference, o, a, b))
+            }
+            Op::Powi(a, n) => {
+                let a = idual(vals[a.index()]);
+                from_idual(grad_powi(&mut Reference, a, i64::from(n)))
+            }
         };
         vals.push(v);
     }

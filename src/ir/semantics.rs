@@ -1,15 +1,21 @@
 //! What each op means: its point rule, its interval rule and its
-//! derivative rules (point and interval dual numbers), written once. The
-//! reference interpreter (`eval::interp`) is a loop over these; the JIT
-//! calls the point rules for the transcendentals and is tested to give the
-//! same bits as all of them.
+//! derivative rules (point and interval dual numbers). The reference
+//! interpreter (`eval::interp`) is a loop over these; the JIT calls the
+//! point and interval rules of the transcendentals through shims, and runs
+//! the very same derivative rules over CLIF values.
 //!
 //! # Derivative rules
-//! The rules live in [`grad_unary`], [`grad_binary`], [`grad_powi`] and
-//! their interval twins [`igrad_unary`], [`igrad_binary`], [`igrad_powi`], so
-//! the JIT can reuse them. Each is the chain rule `f'(a)·da`, with these
-//! conventions:
-//! - A partial that is exactly 0 stays 0 (`chain`): a value that does not
+//! [`grad_unary`], [`grad_binary`] and [`grad_powi`] are written once,
+//! generic over [`Arith`], the arithmetic of one kind of number: the
+//! interpreter implements it over f64 and [`Interval`], the JIT over the
+//! CLIF values of a point and of a packed interval. Where the two backends'
+//! results differ today in their bits (the kink of `abs`, NaN operands of
+//! min and max, the atan2 branch cut, how `sqrt`, `ln`, `pow` and
+//! `powi(_, 1)` round, exact zeros at run time), [`Arith`] has one method
+//! per difference, saying why; the tests compare the JIT with the
+//! interpreter within those. Each rule is the chain rule `f'(a)·da`, with
+//! these conventions (the interpreter's; see [`Arith`] for the JIT's):
+//! - A partial that is exactly 0 stays 0 ([`Arith::keep_zero`]): a value that does not
 //!   depend on a variable contributes nothing to its partial even where
 //!   `f'(a)` is infinite (sqrt at 0, ln at 0). Intervals get the same effect
 //!   from [`Interval::mul`], which drops the 0·inf products.
@@ -135,275 +141,327 @@ pub fn interval_binary(op: BinaryOp, a: Interval, b: Interval) -> Interval {
     }
 }
 
-// f'(a)·da, keeping an exactly-zero partial at zero (see the module doc).
-#[inline]
-fn chain(fp: f64, da: f64) -> f64 {
-    if da == 0.0 { 0.0 } else { fp * da }
-}
+/// A value's partials (∂/∂x, ∂/∂y, ∂/∂z); `None` is a partial known to be
+/// exactly 0 before evaluation (the JIT emits no code for it; the
+/// interpreter never uses `None` on its inputs).
+pub type Partials<N> = [Option<N>; 3];
 
-#[inline]
-fn scale(fp: f64, a: Grad, v: f64) -> Grad {
-    Grad {
-        v,
-        d: [chain(fp, a.d[0]), chain(fp, a.d[1]), chain(fp, a.d[2])],
+/// A value and its partials: a dual number.
+pub type Dual<N> = (N, Partials<N>);
+
+/// The arithmetic the derivative rules are written in, for one kind of
+/// number `N`: the interpreter's (`f64`, [`Interval`]) and the JIT's (CLIF
+/// values of a point or a packed interval).
+///
+/// The first methods are the ops themselves. The rest are the places where
+/// the backends' rules differ today in their bits; each says how and why,
+/// and the defaults are the interpreter's.
+pub trait Arith<N: Copy> {
+    /// The constant `c`.
+    fn konst(&mut self, c: f64) -> N;
+    /// `a + b`.
+    fn add(&mut self, a: N, b: N) -> N;
+    /// `a - b`.
+    fn sub(&mut self, a: N, b: N) -> N;
+    /// `a · b`.
+    fn mul(&mut self, a: N, b: N) -> N;
+    /// `a / b`.
+    fn div(&mut self, a: N, b: N) -> N;
+    /// `-a`.
+    fn neg(&mut self, a: N) -> N;
+    /// A one-operand op.
+    fn unary(&mut self, op: UnaryOp, a: N) -> N;
+    /// A two-operand op.
+    fn binary(&mut self, op: BinaryOp, a: N, b: N) -> N;
+    /// `a^n` (i64 so that the derivative's `n - 1` cannot overflow).
+    fn powi(&mut self, a: N, n: i64) -> N;
+
+    /// `x`, or exactly 0 where `t` is exactly 0. The point interpreter
+    /// tracks exact zeros at run time (so a partial that is 0 stays 0 even
+    /// times an infinite `f'(a)`); intervals get that from
+    /// [`Interval::mul`] and the JIT from `None` partials, so for them it
+    /// is `x`.
+    fn keep_zero(&mut self, t: N, x: N) -> N {
+        let _ = t;
+        x
+    }
+
+    /// Derivative of `|a|` for the partial `x` of `a`. The kink is handled
+    /// differently: the interpreter takes sign(0) = 0 (interval: the sign
+    /// set times `x`, rounded); the JIT takes `x` at 0 and returns `x` or
+    /// `-x` exactly (interval: the hull of both where the sign is unsure).
+    fn abs_grad(&mut self, a: N, x: N) -> N;
+    /// Derivative of `min(a, b)` given the partials `x`, `y`: that of the
+    /// operand min returns (interval: of the one it returns on the whole
+    /// box, else the hull). The interpreter gives NaN (EMPTY) where an
+    /// operand is NaN (EMPTY); the JIT does not test for it.
+    fn min_grad(&mut self, a: N, b: N, x: N, y: N) -> N;
+    /// Derivative of `max(a, b)` (see [`Arith::min_grad`]).
+    fn max_grad(&mut self, a: N, b: N, x: N, y: N) -> N;
+    /// A partial `d` of `atan2(a, b)` from the operands' partials `x`, `y`,
+    /// widened where an interval box touches the branch cut (see
+    /// [`grad_binary`]). Points: `d`. The interval interpreter keeps a
+    /// partial that is exactly [0, 0] in both operands; the JIT tracks that
+    /// as `None` and never gets here with it.
+    fn atan2_cut(&mut self, a: N, b: N, x: Option<N>, y: Option<N>, d: N) -> N {
+        let _ = (a, b, x, y);
+        d
+    }
+    /// The operand whose reciprocal is ln's derivative. The interval
+    /// interpreter takes its non-negative part (where ln is defined, see
+    /// the module doc), the JIT all of it (wider, still sound).
+    fn ln_deriv_arg(&mut self, a: N) -> N {
+        a
+    }
+    /// Each partial times `c / q` (the chain rule with f'(a) = c/q; c is
+    /// 1 or 1/2). The interpreter multiplies by the quotient
+    /// ([`Arith::chain`]); the JIT divides each partial by `q / c` (for
+    /// c = 1/2, `q + q`). Intervals round these differently.
+    fn chain_quot(&mut self, c: f64, q: N, da: Partials<N>) -> Partials<N> {
+        scale(self, da, |cx| {
+            let c = cx.konst(c);
+            cx.div(c, q)
+        })
+    }
+    /// The factor `n·a^(n-1)` of `powi(a, n)`'s derivative, or `None` to
+    /// pass the partials through unchanged. The JIT does that for n = 1
+    /// (its product by exactly 1 is exact); the interpreter multiplies by
+    /// 1 like every factor, which its [`Arith::chain`] rounds (intervals)
+    /// or turns -0 into +0 (points).
+    fn powi_factor(&mut self, a: N, n: i64) -> Option<N> {
+        Some(powi_factor(self, a, n))
+    }
+    /// The partials of `pow(a, b) = v`. The interpreter uses
+    /// [`pow_partials_factored`], the JIT [`pow_partials_log`]: different
+    /// formulas, hence different roundings.
+    fn pow_partials(&mut self, a: N, b: N, v: N, da: Partials<N>, db: Partials<N>) -> Partials<N> {
+        pow_partials_factored(self, a, b, v, da, db)
+    }
+
+    /// The chain-rule product `f'(a)·x` (see [`Arith::keep_zero`]).
+    fn chain(&mut self, fp: N, x: N) -> N {
+        let p = self.mul(fp, x);
+        self.keep_zero(x, p)
     }
 }
 
-/// Value and gradient of a one-operand op (forward mode).
-pub fn grad_unary(op: UnaryOp, a: Grad) -> Grad {
-    let v = point_unary(op, a.v);
-    match op {
-        UnaryOp::Neg => Grad {
-            v,
-            d: [-a.d[0], -a.d[1], -a.d[2]],
-        },
-        UnaryOp::Abs => {
-            let s = if a.v > 0.0 {
-                1.0
-            } else if a.v < 0.0 {
-                -1.0
-            } else if a.v == 0.0 {
-                0.0
-            } else {
-                f64::NAN
-            };
-            scale(s, a, v)
+/// `rule(x)` for each partial that is not known to be 0.
+fn map_partials<N: Copy, C: Arith<N> + ?Sized>(
+    cx: &mut C,
+    d: Partials<N>,
+    mut rule: impl FnMut(&mut C, N) -> N,
+) -> Partials<N> {
+    d.map(|x| x.map(|x| rule(cx, x)))
+}
+
+/// `f'(a)·x` for each partial, with `f'(a)` from `fp`, built only if some
+/// partial is not known to be 0.
+pub fn scale<N: Copy, C: Arith<N> + ?Sized>(
+    cx: &mut C,
+    da: Partials<N>,
+    fp: impl FnOnce(&mut C) -> N,
+) -> Partials<N> {
+    if da.iter().all(Option::is_none) {
+        return da;
+    }
+    let fp = fp(cx);
+    map_partials(cx, da, |cx, x| cx.chain(fp, x))
+}
+
+/// `f(x, y)` for each k where the operands' partials are not both known
+/// to be 0.
+fn zip_partials<N: Copy, C: Arith<N> + ?Sized>(
+    cx: &mut C,
+    da: Partials<N>,
+    db: Partials<N>,
+    mut f: impl FnMut(&mut C, Option<N>, Option<N>) -> N,
+) -> Partials<N> {
+    let mut d = [None; 3];
+    for k in 0..3 {
+        if da[k].is_some() || db[k].is_some() {
+            d[k] = Some(f(cx, da[k], db[k]));
         }
-        UnaryOp::Square => scale(2.0 * a.v, a, v),
-        UnaryOp::Sqrt => scale(0.5 / v, a, v),
-        UnaryOp::Exp => scale(v, a, v),
-        UnaryOp::Ln => scale(1.0 / a.v, a, v),
-        UnaryOp::Sin => scale(libm::cos(a.v), a, v),
-        UnaryOp::Cos => scale(-libm::sin(a.v), a, v),
+    }
+    d
+}
+
+/// `l + r`, where `None` is 0.
+fn sum<N: Copy, C: Arith<N> + ?Sized>(cx: &mut C, l: Option<N>, r: Option<N>) -> N {
+    match (l, r) {
+        (Some(l), Some(r)) => cx.add(l, r),
+        (Some(x), None) | (None, Some(x)) => x,
+        (None, None) => cx.konst(0.0),
     }
 }
 
-/// Value and gradient of a two-operand op (forward mode).
-pub fn grad_binary(op: BinaryOp, a: Grad, b: Grad) -> Grad {
-    let v = point_binary(op, a.v, b.v);
-    let d = |f: &dyn Fn(usize) -> f64| [f(0), f(1), f(2)];
-    match op {
-        BinaryOp::Add => Grad {
-            v,
-            d: d(&|i| a.d[i] + b.d[i]),
-        },
-        BinaryOp::Sub => Grad {
-            v,
-            d: d(&|i| a.d[i] - b.d[i]),
-        },
-        BinaryOp::Mul => Grad {
-            v,
-            d: d(&|i| chain(a.v, b.d[i]) + chain(b.v, a.d[i])),
-        },
-        BinaryOp::Div => Grad {
-            v,
-            d: d(&|i| (a.d[i] - chain(v, b.d[i])) / b.v),
-        },
-        BinaryOp::Min => {
-            let chosen = if a.v.is_nan() || b.v.is_nan() {
-                return Grad {
-                    v,
-                    d: [f64::NAN; 3],
-                };
-            } else if a.v < b.v {
-                a
-            } else {
-                b
-            };
-            Grad { v, d: chosen.d }
-        }
-        BinaryOp::Max => {
-            let chosen = if a.v.is_nan() || b.v.is_nan() {
-                return Grad {
-                    v,
-                    d: [f64::NAN; 3],
-                };
-            } else if a.v > b.v {
-                a
-            } else {
-                b
-            };
-            Grad { v, d: chosen.d }
-        }
-        BinaryOp::Atan2 => {
-            // d atan2(y, x) = (x·dy - y·dx) / (x² + y²), with y = a, x = b.
-            let r2 = a.v * a.v + b.v * b.v;
-            Grad {
-                v,
-                d: d(&|i| (chain(b.v, a.d[i]) - chain(a.v, b.d[i])) / r2),
-            }
-        }
-        BinaryOp::Pow => {
-            // a^0 is 1 for every a: its a-partial is 0 even at a = 0.
-            let da = if b.v == 0.0 {
-                0.0
-            } else {
-                point_binary(BinaryOp::Pow, a.v, b.v - 1.0) * b.v
-            };
-            let db = if v == 0.0 { 0.0 } else { v * libm::log(a.v) };
-            Grad {
-                v,
-                d: d(&|i| chain(da, a.d[i]) + chain(db, b.d[i])),
-            }
-        }
+/// `l - r`, where `None` is 0.
+fn difference<N: Copy, C: Arith<N> + ?Sized>(cx: &mut C, l: Option<N>, r: Option<N>) -> N {
+    match (l, r) {
+        (Some(l), Some(r)) => cx.sub(l, r),
+        (Some(x), None) => x,
+        (None, Some(y)) => cx.neg(y),
+        (None, None) => cx.konst(0.0),
     }
 }
 
-/// Value and gradient of `powi(a, n)` (forward mode).
-pub fn grad_powi(a: Grad, n: i32) -> Grad {
-    let v = point_powi(a.v, n);
-    if n == 0 {
-        return Grad { v, d: [0.0; 3] };
-    }
-    scale(f64::from(n) * point_powi(a.v, n - 1), a, v)
-}
-
-#[inline]
-fn iscale(fp: Interval, a: IntervalGrad, v: Interval) -> IntervalGrad {
-    IntervalGrad {
-        v,
-        d: [fp.mul(a.d[0]), fp.mul(a.d[1]), fp.mul(a.d[2])],
-    }
-}
-
-/// Intervals of value and gradient of a one-operand op over a box.
-pub fn igrad_unary(op: UnaryOp, a: IntervalGrad) -> IntervalGrad {
-    let v = interval_unary(op, a.v);
-    match op {
-        UnaryOp::Neg => IntervalGrad {
-            v,
-            d: [a.d[0].neg(), a.d[1].neg(), a.d[2].neg()],
-        },
-        UnaryOp::Abs => {
-            let s = if a.v.is_empty() {
-                Interval::EMPTY
-            } else if a.v.lo > 0.0 {
-                Interval::point(1.0)
-            } else if a.v.hi < 0.0 {
-                Interval::point(-1.0)
-            } else if a.v.lo == 0.0 && a.v.hi == 0.0 {
-                Interval::point(0.0)
-            } else if a.v.lo == 0.0 {
-                Interval::new(0.0, 1.0)
-            } else if a.v.hi == 0.0 {
-                Interval::new(-1.0, 0.0)
-            } else {
-                Interval::new(-1.0, 1.0)
-            };
-            iscale(s, a, v)
-        }
-        UnaryOp::Square => iscale(a.v.mul(Interval::point(2.0)), a, v),
-        UnaryOp::Sqrt => iscale(Interval::point(0.5).div(v), a, v),
-        UnaryOp::Exp => iscale(v, a, v),
+/// Value and partials of a one-operand op (forward mode).
+pub fn grad_unary<N: Copy, C: Arith<N> + ?Sized>(
+    cx: &mut C,
+    op: UnaryOp,
+    (a, da): Dual<N>,
+) -> Dual<N> {
+    let v = cx.unary(op, a);
+    let d = match op {
+        UnaryOp::Neg => map_partials(cx, da, |cx, x| cx.neg(x)),
+        UnaryOp::Abs => map_partials(cx, da, |cx, x| cx.abs_grad(a, x)),
+        UnaryOp::Square => scale(cx, da, |cx| cx.add(a, a)),
+        UnaryOp::Sqrt => cx.chain_quot(0.5, v, da),
+        UnaryOp::Exp => scale(cx, da, |_| v),
         UnaryOp::Ln => {
-            let pos = if a.v.is_empty() || a.v.hi < 0.0 {
-                Interval::EMPTY
-            } else {
-                Interval::new(a.v.lo.max(0.0), a.v.hi)
-            };
-            iscale(Interval::point(1.0).div(pos), a, v)
+            let q = cx.ln_deriv_arg(a);
+            cx.chain_quot(1.0, q, da)
         }
-        UnaryOp::Sin => iscale(a.v.cos(), a, v),
-        UnaryOp::Cos => iscale(a.v.sin().neg(), a, v),
-    }
+        UnaryOp::Sin => scale(cx, da, |cx| cx.unary(UnaryOp::Cos, a)),
+        UnaryOp::Cos => scale(cx, da, |cx| {
+            let s = cx.unary(UnaryOp::Sin, a);
+            cx.neg(s)
+        }),
+    };
+    (v, d)
 }
 
-/// Intervals of value and gradient of a two-operand op over a box.
-pub fn igrad_binary(op: BinaryOp, a: IntervalGrad, b: IntervalGrad) -> IntervalGrad {
-    let v = interval_binary(op, a.v, b.v);
-    let d = |f: &dyn Fn(usize) -> Interval| [f(0), f(1), f(2)];
-    match op {
-        BinaryOp::Add => IntervalGrad {
-            v,
-            d: d(&|i| a.d[i].add(b.d[i])),
-        },
-        BinaryOp::Sub => IntervalGrad {
-            v,
-            d: d(&|i| a.d[i].sub(b.d[i])),
-        },
-        BinaryOp::Mul => IntervalGrad {
-            v,
-            d: d(&|i| a.v.mul(b.d[i]).add(b.v.mul(a.d[i]))),
-        },
-        BinaryOp::Div => IntervalGrad {
-            v,
-            d: d(&|i| a.d[i].sub(v.mul(b.d[i])).div(b.v)),
-        },
-        BinaryOp::Min | BinaryOp::Max => {
-            // `first`: the op returns a's value at every point of the box.
-            let first = if op == BinaryOp::Min {
-                a.v.hi < b.v.lo
-            } else {
-                a.v.lo > b.v.hi
-            };
-            let second = if op == BinaryOp::Min {
-                b.v.hi <= a.v.lo
-            } else {
-                b.v.lo >= a.v.hi
-            };
-            IntervalGrad {
-                v,
-                d: d(&|i| {
-                    if v.is_empty() {
-                        Interval::EMPTY
-                    } else if first {
-                        a.d[i]
-                    } else if second {
-                        b.d[i]
-                    } else {
-                        a.d[i].hull(b.d[i])
-                    }
-                }),
-            }
-        }
+/// Value and partials of a two-operand op (forward mode).
+pub fn grad_binary<N: Copy, C: Arith<N> + ?Sized>(
+    cx: &mut C,
+    op: BinaryOp,
+    (a, da): Dual<N>,
+    (b, db): Dual<N>,
+) -> Dual<N> {
+    let v = cx.binary(op, a, b);
+    let zero = |cx: &mut C, x: Option<N>| x.unwrap_or_else(|| cx.konst(0.0));
+    let d = match op {
+        BinaryOp::Add => zip_partials(cx, da, db, sum),
+        BinaryOp::Sub => zip_partials(cx, da, db, difference),
+        // b·da + a·db
+        BinaryOp::Mul => zip_partials(cx, da, db, |cx, x, y| {
+            let l = x.map(|x| cx.chain(b, x));
+            let r = y.map(|y| cx.chain(a, y));
+            sum(cx, l, r)
+        }),
+        // (da - v·db) / b
+        BinaryOp::Div => zip_partials(cx, da, db, |cx, x, y| {
+            let r = y.map(|y| cx.chain(v, y));
+            let n = difference(cx, x, r);
+            cx.div(n, b)
+        }),
+        BinaryOp::Min => zip_partials(cx, da, db, |cx, x, y| {
+            let (x, y) = (zero(cx, x), zero(cx, y));
+            cx.min_grad(a, b, x, y)
+        }),
+        BinaryOp::Max => zip_partials(cx, da, db, |cx, x, y| {
+            let (x, y) = (zero(cx, x), zero(cx, y));
+            cx.max_grad(a, b, x, y)
+        }),
+        // (b·da - a·db) / (a² + b²). atan2(a, b) jumps by 2π across its
+        // branch cut (a = 0, b < 0); a box touching the cut has no finite
+        // bound on how fast f changes, so interval contexts widen the
+        // partial there ([`Arith::atan2_cut`]): the formula would miss the
+        // jump, and interval Newton, the centred form and the inclusion
+        // test would drop or misplace the sign change.
         BinaryOp::Atan2 => {
-            // atan2(a, b) jumps by 2π across its branch cut (a = 0, b < 0).
-            // A box touching the cut (the same test as the value's) has no
-            // finite bound on how fast f changes: the derivative formula
-            // below would miss the jump, and interval Newton, the centred
-            // form and the inclusion test would then drop or misplace the
-            // sign change there. Every direction that moves a or b gets the
-            // whole line.
-            if b.v.lo <= 0.0 && a.v.lo <= 0.0 && 0.0 <= a.v.hi {
-                let zero = |x: Interval| x.lo == 0.0 && x.hi == 0.0;
-                return IntervalGrad {
-                    v,
-                    d: d(&|i| {
-                        if zero(a.d[i]) && zero(b.d[i]) {
-                            Interval::point(0.0)
-                        } else {
-                            Interval::ENTIRE
-                        }
-                    }),
-                };
+            if da.iter().chain(&db).all(Option::is_none) {
+                return (v, [None; 3]);
             }
-            let r2 = a.v.square().add(b.v.square());
-            IntervalGrad {
-                v,
-                d: d(&|i| b.v.mul(a.d[i]).sub(a.v.mul(b.d[i])).div(r2)),
-            }
+            let a2 = cx.unary(UnaryOp::Square, a);
+            let b2 = cx.unary(UnaryOp::Square, b);
+            let r2 = cx.add(a2, b2);
+            zip_partials(cx, da, db, |cx, x, y| {
+                let l = x.map(|x| cx.chain(b, x));
+                let r = y.map(|y| cx.chain(a, y));
+                let n = difference(cx, l, r);
+                let q = cx.div(n, r2);
+                cx.atan2_cut(a, b, x, y, q)
+            })
         }
-        BinaryOp::Pow => {
-            let da = a.v.pow(b.v.sub(Interval::point(1.0))).mul(b.v);
-            let db = v.mul(a.v.ln());
-            IntervalGrad {
-                v,
-                d: d(&|i| da.mul(a.d[i]).add(db.mul(b.d[i]))),
-            }
-        }
-    }
+        BinaryOp::Pow => cx.pow_partials(a, b, v, da, db),
+    };
+    (v, d)
 }
 
-/// Intervals of value and gradient of `powi(a, n)` over a box.
-pub fn igrad_powi(a: IntervalGrad, n: i32) -> IntervalGrad {
-    let v = a.v.powi(n);
+/// `n·a^(n-1)`, the factor of `powi(a, n)`'s derivative.
+pub fn powi_factor<N: Copy, C: Arith<N> + ?Sized>(cx: &mut C, a: N, n: i64) -> N {
+    let nk = cx.konst(n as f64);
+    let p = cx.powi(a, n - 1);
+    cx.mul(nk, p)
+}
+
+/// Value and partials of `powi(a, n)` (forward mode): `n·a^(n-1)·da`, and
+/// exactly 0 for n = 0.
+pub fn grad_powi<N: Copy, C: Arith<N> + ?Sized>(cx: &mut C, (a, da): Dual<N>, n: i64) -> Dual<N> {
+    let v = cx.powi(a, n);
     if n == 0 {
-        return IntervalGrad {
-            v,
-            d: [Interval::point(0.0); 3],
-        };
+        return (v, [None; 3]);
     }
-    iscale(Interval::point(f64::from(n)).mul(a.v.powi(n - 1)), a, v)
+    if da.iter().all(Option::is_none) {
+        return (v, da);
+    }
+    let d = match cx.powi_factor(a, n) {
+        None => da,
+        Some(k) => map_partials(cx, da, |cx, x| cx.chain(k, x)),
+    };
+    (v, d)
+}
+
+/// pow's partials as `b·a^(b-1)·da + a^b·ln(a)·db` (the interpreter's):
+/// each factor 0 where `keep_zero` sees b = 0 (a^0 is 1 for every a) or
+/// a^b = 0 (0^b for b > 0 is 0 for every b nearby).
+pub fn pow_partials_factored<N: Copy, C: Arith<N> + ?Sized>(
+    cx: &mut C,
+    a: N,
+    b: N,
+    v: N,
+    da: Partials<N>,
+    db: Partials<N>,
+) -> Partials<N> {
+    if da.iter().chain(&db).all(Option::is_none) {
+        return [None; 3];
+    }
+    let one = cx.konst(1.0);
+    let b1 = cx.sub(b, one);
+    let p = cx.binary(BinaryOp::Pow, a, b1);
+    let fa = cx.mul(p, b);
+    let fa = cx.keep_zero(b, fa);
+    let ln = cx.unary(UnaryOp::Ln, a);
+    let fb = cx.mul(v, ln);
+    let fb = cx.keep_zero(v, fb);
+    zip_partials(cx, da, db, |cx, x, y| {
+        let l = x.map(|x| cx.chain(fa, x));
+        let r = y.map(|y| cx.chain(fb, y));
+        sum(cx, l, r)
+    })
+}
+
+/// pow's partials as `v·(db·ln a + b·da/a)` (the JIT's: one pow per op).
+pub fn pow_partials_log<N: Copy, C: Arith<N> + ?Sized>(
+    cx: &mut C,
+    a: N,
+    b: N,
+    v: N,
+    da: Partials<N>,
+    db: Partials<N>,
+) -> Partials<N> {
+    zip_partials(cx, da, db, |cx, x, y| {
+        let l = y.map(|y| {
+            let ln = cx.unary(UnaryOp::Ln, a);
+            cx.mul(y, ln)
+        });
+        let r = x.map(|x| {
+            let q = cx.div(x, a);
+            cx.mul(b, q)
+        });
+        let s = sum(cx, l, r);
+        cx.mul(v, s)
+    })
 }
 
 /// Every value of the function `ops` at `p`, in op order, into `vals`.

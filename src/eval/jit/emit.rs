@@ -14,7 +14,7 @@ use cranelift_codegen::ir::{
 };
 use cranelift_frontend::FunctionBuilder;
 
-use crate::ir::{BinaryOp, UnaryOp};
+use super::shims::{SHIM_COUNT, Shim};
 
 /// Live-op count from which float selects are emitted as integer `cmov`s
 /// (see [`Emitter::select`]).
@@ -33,37 +33,14 @@ pub(crate) fn use_int_select(live: &[bool]) -> bool {
 #[derive(Copy, Clone, Debug)]
 pub(crate) struct Iv(pub Value);
 
-/// The transcendental shims imported into the function being built.
+/// The shims imported into the function being built, by [`Shim`].
 #[derive(Copy, Clone, Debug)]
-pub(crate) struct ShimRefs {
-    /// Point shims: exp, ln, sin, cos (f64 -> f64).
-    pub point_unary: [FuncRef; 4],
-    /// Point shims: atan2, pow ((f64, f64) -> f64).
-    pub point_binary: [FuncRef; 2],
-    /// Interval shims: exp, ln, sin, cos ((lo, hi) -> (lo, hi)).
-    pub interval_unary: [FuncRef; 4],
-    /// Interval shims: atan2, pow, and division by a divisor holding 0
-    /// ((lo, hi, lo, hi) -> (lo, hi)).
-    pub interval_binary: [FuncRef; 3],
-}
+pub(crate) struct ShimRefs(pub [FuncRef; SHIM_COUNT]);
 
-/// Position of a transcendental unary op in [`ShimRefs`] arrays.
-pub(crate) fn unary_shim_index(op: UnaryOp) -> Option<usize> {
-    match op {
-        UnaryOp::Exp => Some(0),
-        UnaryOp::Ln => Some(1),
-        UnaryOp::Sin => Some(2),
-        UnaryOp::Cos => Some(3),
-        _ => None,
-    }
-}
-
-/// Position of a transcendental binary op in [`ShimRefs`] arrays.
-pub(crate) fn binary_shim_index(op: BinaryOp) -> Option<usize> {
-    match op {
-        BinaryOp::Atan2 => Some(0),
-        BinaryOp::Pow => Some(1),
-        _ => None,
+impl ShimRefs {
+    /// The imported reference of `shim`.
+    pub fn get(&self, shim: Shim) -> FuncRef {
+        self.0[shim as usize]
     }
 }
 
@@ -468,7 +445,7 @@ impl Emitter<'_, '_> {
         let call = self
             .b
             .ins()
-            .call(self.shims.interval_binary[2], &[alo, ahi, blo, bhi]);
+            .call(self.shims.get(Shim::IntervalDivZero), &[alo, ahi, blo, bhi]);
         let res = self.b.inst_results(call).to_vec();
         let q = self.iv_from_bounds(res[0], res[1]);
         self.b.ins().jump(join, &[BlockArg::Value(q.0)]);
@@ -611,33 +588,33 @@ impl Emitter<'_, '_> {
     }
 
     /// A point transcendental through its shim.
-    pub fn call_point_unary(&mut self, i: usize, a: Value) -> Value {
-        let call = self.b.ins().call(self.shims.point_unary[i], &[a]);
+    pub fn call_point_unary(&mut self, shim: Shim, a: Value) -> Value {
+        let call = self.b.ins().call(self.shims.get(shim), &[a]);
         self.b.inst_results(call)[0]
     }
 
-    pub fn call_point_binary(&mut self, i: usize, a: Value, b: Value) -> Value {
-        let call = self.b.ins().call(self.shims.point_binary[i], &[a, b]);
+    pub fn call_point_binary(&mut self, shim: Shim, a: Value, b: Value) -> Value {
+        let call = self.b.ins().call(self.shims.get(shim), &[a, b]);
         self.b.inst_results(call)[0]
     }
 
     /// An interval transcendental through its shim: bounds travel as f64
     /// arguments and come back as two f64 results (xmm0, xmm1), which is
     /// the C ABI of a returned `#[repr(C)]` pair of doubles.
-    pub fn call_iv_unary(&mut self, i: usize, a: Iv) -> Iv {
+    pub fn call_iv_unary(&mut self, shim: Shim, a: Iv) -> Iv {
         let (lo, hi) = self.iv_bounds(a);
-        let call = self.b.ins().call(self.shims.interval_unary[i], &[lo, hi]);
+        let call = self.b.ins().call(self.shims.get(shim), &[lo, hi]);
         let r = self.b.inst_results(call).to_vec();
         self.iv_from_bounds(r[0], r[1])
     }
 
-    pub fn call_iv_binary(&mut self, i: usize, a: Iv, b: Iv) -> Iv {
+    pub fn call_iv_binary(&mut self, shim: Shim, a: Iv, b: Iv) -> Iv {
         let (alo, ahi) = self.iv_bounds(a);
         let (blo, bhi) = self.iv_bounds(b);
         let call = self
             .b
             .ins()
-            .call(self.shims.interval_binary[i], &[alo, ahi, blo, bhi]);
+            .call(self.shims.get(shim), &[alo, ahi, blo, bhi]);
         let r = self.b.inst_results(call).to_vec();
         self.iv_from_bounds(r[0], r[1])
     }

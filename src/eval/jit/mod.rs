@@ -33,6 +33,7 @@
 //! `regalloc_algorithm`, default `backtracking`); see the README's
 //! performance notes for what they measured.
 
+mod derive;
 mod emit;
 mod lower;
 #[allow(unsafe_code)] // the one module that calls JIT code and frees its memory
@@ -56,7 +57,7 @@ use crate::interval::Interval;
 use crate::ir::Function;
 use emit::{Emitter, ShimRefs};
 use raw::{Code, EntryFn, IntervalBatchFn, IntervalFn, PointBatchFn, PointFn, PointGradFn};
-use shims::ShimSig;
+use shims::{SHIM_COUNT, Shim};
 
 /// Why a function could not be compiled.
 #[derive(Debug, Clone, PartialEq)]
@@ -176,25 +177,31 @@ fn isa() -> Result<OwnedTargetIsa, JitError> {
     .clone()
 }
 
+/// The shims declared in one module, by [`Shim`].
+struct ShimIds([FuncId; SHIM_COUNT]);
+
+impl ShimIds {
+    /// Imports every shim into `func`.
+    fn import(&self, module: &mut JITModule, func: &mut ir::Function) -> ShimRefs {
+        ShimRefs(self.0.map(|id| module.declare_func_in_func(id, func)))
+    }
+}
+
 /// A fresh module that knows every shim symbol, and the shims declared in it.
-fn new_module() -> Result<(JITModule, [FuncId; 13]), JitError> {
+fn new_module() -> Result<(JITModule, ShimIds), JitError> {
     let isa = isa()?;
     let cc = isa.default_call_conv();
     let mut jb = JITBuilder::with_isa(isa, default_libcall_names());
-    let all = shims::all();
-    for (name, _, ptr) in all {
+    for shim in Shim::ALL {
+        let (name, _, ptr) = shim.entry();
         jb.symbol(name, ptr);
     }
     let mut module = JITModule::new(jb);
-    let mut ids = Vec::with_capacity(all.len());
-    for (name, sig, _) in all {
+    let mut ids = Vec::with_capacity(SHIM_COUNT);
+    for shim in Shim::ALL {
+        let (name, sig, _) = shim.entry();
+        let (params, rets) = sig.arity();
         let mut s = ir::Signature::new(cc);
-        let (params, rets) = match sig {
-            ShimSig::PointUnary => (1, 1),
-            ShimSig::PointBinary => (2, 1),
-            ShimSig::IntervalUnary => (2, 2),
-            ShimSig::IntervalBinary => (4, 2),
-        };
         s.params
             .extend((0..params).map(|_| ir::AbiParam::new(types::F64)));
         s.returns
@@ -204,10 +211,10 @@ fn new_module() -> Result<(JITModule, [FuncId; 13]), JitError> {
             .map_err(|e| JitError::new(name, e))?;
         ids.push(id);
     }
-    let ids: [FuncId; 13] = ids
+    let ids = ids
         .try_into()
         .map_err(|_| JitError("shim table size".into()))?;
-    Ok((module, ids))
+    Ok((module, ShimIds(ids)))
 }
 
 /// Builds the CLIF function of `kind` for `f` (not yet compiled).
@@ -216,21 +223,15 @@ fn build(
     f: &Function,
     live: &[bool],
     module: &mut JITModule,
-    shim_ids: &[FuncId; 13],
+    shim_ids: &ShimIds,
     body: Option<FuncId>,
 ) -> ir::Function {
     let cc = module.isa().default_call_conv();
     let mut func =
         ir::Function::with_name_signature(UserFuncName::user(0, kind as u32), kind.signature(cc));
     let fe_config = module.isa().frontend_config();
-    let r = shim_ids.map(|id| module.declare_func_in_func(id, &mut func));
+    let shims = shim_ids.import(module, &mut func);
     let callee = body.map(|id| module.declare_func_in_func(id, &mut func));
-    let shims = ShimRefs {
-        point_unary: [r[0], r[1], r[2], r[3]],
-        point_binary: [r[4], r[5]],
-        interval_unary: [r[6], r[7], r[8], r[9]],
-        interval_binary: [r[10], r[11], r[12]],
-    };
     let mut fctx = FunctionBuilderContext::new();
     let mut b = FunctionBuilder::new(&mut func, &mut fctx);
     let entry = b.create_block();
@@ -248,7 +249,7 @@ fn build(
         }
         Kind::PointGrad => {
             let mut e = Emitter::new(&mut b, shims, int_select);
-            let (v, d) = lower::grad(&mut e, f, live, [params[0], params[1], params[2]]);
+            let (v, d) = derive::grad(&mut e, f, live, [params[0], params[1], params[2]]);
             let out = params[3];
             e.store(v, out, 0);
             for (k, dk) in d.into_iter().enumerate() {
@@ -267,7 +268,7 @@ fn build(
         Kind::IntervalGrad => {
             let mut e = Emitter::new(&mut b, shims, int_select);
             let bx = load_box(&mut e, params[0]);
-            let (v, d) = lower::grad(&mut e, f, live, bx);
+            let (v, d) = derive::grad(&mut e, f, live, bx);
             let out = params[1];
             e.iv_store(v, out, 0);
             for (k, dk) in d.into_iter().enumerate() {
@@ -280,7 +281,7 @@ fn build(
             let mut e = Emitter::new(&mut b, shims, int_select);
             let bx = load_box(&mut e, params[0]);
             let dir = [0, 1, 2].map(|k| e.iv_load(params[0], 48 + 16 * k));
-            let (v, d) = lower::directional(&mut e, f, live, bx, dir);
+            let (v, d) = derive::directional(&mut e, f, live, bx, dir);
             let out = params[1];
             e.iv_store(v, out, 0);
             let d = d.unwrap_or_else(|| e.iv_const(0.0));
@@ -358,7 +359,7 @@ fn define(
     f: &Function,
     live: &[bool],
     module: &mut JITModule,
-    shim_ids: &[FuncId; 13],
+    shim_ids: &ShimIds,
     id: FuncId,
     body: Option<FuncId>,
 ) -> Result<(), JitError> {
@@ -389,7 +390,7 @@ fn define_all(
     f: &Function,
     live: &[bool],
     module: &mut JITModule,
-    shim_ids: &[FuncId; 13],
+    shim_ids: &ShimIds,
 ) -> Result<FuncId, JitError> {
     let body = match batch_body(kind) {
         Some(bk) => {
@@ -642,13 +643,7 @@ mod tests {
         let cc = module.isa().default_call_conv();
         let sig = PointFn::signature(cc);
         let mut func = ir::Function::with_name_signature(UserFuncName::user(0, 0), sig.clone());
-        let r = shim_ids.map(|id| module.declare_func_in_func(id, &mut func));
-        let shims = ShimRefs {
-            point_unary: [r[0], r[1], r[2], r[3]],
-            point_binary: [r[4], r[5]],
-            interval_unary: [r[6], r[7], r[8], r[9]],
-            interval_binary: [r[10], r[11], r[12]],
-        };
+        let shims = shim_ids.import(&mut module, &mut func);
         let fe = module.isa().frontend_config();
         let mut fctx = FunctionBuilderContext::new();
         let mut b = FunctionBuilder::new(&mut func, &mut fctx);
