@@ -11,6 +11,8 @@
 //! same coefficients, so a ray's boxes and its block's hulls describe the
 //! same real line.
 
+use glam::DVec3;
+
 use crate::interval::Interval;
 pub use crate::interval::boxes::IBox;
 use crate::interval::boxes::{box_hull, ray_box};
@@ -60,17 +62,17 @@ impl std::fmt::Display for CameraError {
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct RayCamera {
     /// Ray origin at screen position (0, 0).
-    pub o0: [f64; 3],
+    pub o0: DVec3,
     /// Change of the origin per pixel in X.
-    pub ox: [f64; 3],
+    pub ox: DVec3,
     /// Change of the origin per pixel in Y.
-    pub oy: [f64; 3],
+    pub oy: DVec3,
     /// Ray direction at screen position (0, 0).
-    pub d0: [f64; 3],
+    pub d0: DVec3,
     /// Change of the direction per pixel in X.
-    pub dx: [f64; 3],
+    pub dx: DVec3,
     /// Change of the direction per pixel in Y.
-    pub dy: [f64; 3],
+    pub dy: DVec3,
     /// Image width in pixels.
     pub width: u32,
     /// Image height in pixels.
@@ -80,31 +82,16 @@ pub struct RayCamera {
     spacing_per_t: f64,
 }
 
-pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-pub(crate) fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
-}
-pub(crate) fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-pub(crate) fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-pub(crate) fn normalize(a: [f64; 3]) -> Option<[f64; 3]> {
-    let n = norm(a);
-    (n.is_finite() && n > 0.0).then(|| scale(a, 1.0 / n))
+/// `a / |a|`, computed as `a * (1 / |a|)`, when |a| is finite and > 0.
+///
+/// The renderer's contract, spelled out rather than borrowed from
+/// `DVec3::try_normalize`, which tests `1 / |a|` instead: the two agree
+/// today (a nonzero |a| is at least √(smallest subnormal) ≈ 2.2e-162, so
+/// `1 / |a|` never overflows), but the images must not depend on glam
+/// keeping that test and that arithmetic.
+pub(crate) fn normalize(a: DVec3) -> Option<DVec3> {
+    let n = a.length();
+    (n.is_finite() && n > 0.0).then(|| a * (1.0 / n))
 }
 
 /// The scene bounds as a box.
@@ -122,19 +109,20 @@ impl RayCamera {
         if !finite(cam.eye) || !finite(cam.target) || !finite(cam.up) {
             return Err(CameraError::EyeIsTarget);
         }
-        let w = normalize(sub(cam.target, cam.eye)).ok_or(CameraError::EyeIsTarget)?;
-        let up = normalize(cam.up).ok_or(CameraError::UpParallel)?;
-        let side = cross(w, up);
+        let eye = DVec3::from_array(cam.eye);
+        let target = DVec3::from_array(cam.target);
+        let w = normalize(target - eye).ok_or(CameraError::EyeIsTarget)?;
+        let up = normalize(DVec3::from_array(cam.up)).ok_or(CameraError::UpParallel)?;
+        let side = w.cross(up);
         // A relative threshold: an up vector within ~0.06° of the view
         // direction gives a basis too ill-conditioned to be meaningful.
-        if norm(side) < 1e-6 {
+        if side.length() < 1e-6 {
             return Err(CameraError::UpParallel);
         }
         let u = normalize(side).ok_or(CameraError::UpParallel)?;
-        let v = cross(u, w);
+        let v = u.cross(w);
         let (wf, hf) = (width as f64, height as f64);
         let aspect = wf / hf;
-        let zero = [0.0; 3];
         match cam.projection {
             Projection::Perspective { fov_deg } => {
                 if !(fov_deg > 0.0 && fov_deg < 180.0) {
@@ -142,20 +130,20 @@ impl RayCamera {
                 }
                 let hh = (fov_deg.to_radians() * 0.5).tan();
                 let hw = hh * aspect;
-                let d0 = add(sub(w, scale(u, hw)), scale(v, hh));
-                let dx = scale(u, 2.0 * hw / wf);
-                let dy = scale(v, -2.0 * hh / hf);
+                let d0 = w - u * hw + v * hh;
+                let dx = u * (2.0 * hw / wf);
+                let dy = v * (-2.0 * hh / hf);
                 Ok(RayCamera {
-                    o0: cam.eye,
-                    ox: zero,
-                    oy: zero,
+                    o0: eye,
+                    ox: DVec3::ZERO,
+                    oy: DVec3::ZERO,
                     d0,
                     dx,
                     dy,
                     width,
                     height,
                     spacing0: 0.0,
-                    spacing_per_t: norm(dx).max(norm(dy)),
+                    spacing_per_t: dx.length().max(dy.length()),
                 })
             }
             Projection::Orthographic { width: vw } => {
@@ -164,19 +152,19 @@ impl RayCamera {
                 }
                 let hw = vw * 0.5;
                 let hh = hw / aspect;
-                let o0 = add(sub(cam.eye, scale(u, hw)), scale(v, hh));
-                let ox = scale(u, 2.0 * hw / wf);
-                let oy = scale(v, -2.0 * hh / hf);
+                let o0 = eye - u * hw + v * hh;
+                let ox = u * (2.0 * hw / wf);
+                let oy = v * (-2.0 * hh / hf);
                 Ok(RayCamera {
                     o0,
                     ox,
                     oy,
                     d0: w,
-                    dx: zero,
-                    dy: zero,
+                    dx: DVec3::ZERO,
+                    dy: DVec3::ZERO,
                     width,
                     height,
-                    spacing0: norm(ox).max(norm(oy)),
+                    spacing0: ox.length().max(oy.length()),
                     spacing_per_t: 0.0,
                 })
             }
@@ -186,7 +174,7 @@ impl RayCamera {
     /// Enclosures of the origin and direction of the ray at screen (x, y).
     pub fn ray_at(&self, x: f64, y: f64) -> (IBox, IBox) {
         let (xi, yi) = (Interval::point(x), Interval::point(y));
-        let aff = |c: [f64; 3], cx: [f64; 3], cy: [f64; 3]| -> IBox {
+        let aff = |c: DVec3, cx: DVec3, cy: DVec3| -> IBox {
             std::array::from_fn(|i| {
                 Interval::point(c[i])
                     .add(xi.mul(Interval::point(cx[i])))
@@ -281,7 +269,7 @@ pub struct PixelRay {
 impl PixelRay {
     /// The f64 point at parameter t (for point evaluation and shading).
     pub fn at(&self, t: f64) -> [f64; 3] {
-        add(self.om, scale(self.dm, t))
+        (DVec3::from_array(self.om) + DVec3::from_array(self.dm) * t).to_array()
     }
 
     /// The parameter range inside `b` (slab test), widened a little so it
@@ -356,9 +344,38 @@ mod tests {
         let rc = RayCamera::new(&Camera::default(), 64, 64).unwrap();
         let (_, d) = rc.ray_at(32.0, 32.0);
         let dm = d.map(|c| c.mid());
-        let w = normalize(sub([0.0; 3], Camera::default().eye)).unwrap();
-        let n = normalize(dm).unwrap();
-        assert!((dot(n, w) - 1.0).abs() < 1e-12);
+        let w = normalize(-DVec3::from_array(Camera::default().eye)).unwrap();
+        let n = normalize(DVec3::from_array(dm)).unwrap();
+        assert!((n.dot(w) - 1.0).abs() < 1e-12);
+    }
+
+    // Edge cases of the normalize contract (see its doc): zero, the
+    // smallest subnormals, huge and non-finite components; glam's own test
+    // agrees on all of them, bit for bit.
+    #[test]
+    fn normalize_refuses_exactly_zero_and_non_finite_lengths() {
+        let tiny = f64::from_bits(1);
+        let cases = [
+            ([0.0, 0.0, 0.0], false),
+            ([-0.0, 0.0, -0.0], false),
+            ([tiny, 0.0, 0.0], false),
+            ([1e-160, 0.0, 0.0], true),
+            ([1e300, 1e300, 0.0], false),
+            ([1e150, -1e150, 1e150], true),
+            ([f64::INFINITY, 0.0, 0.0], false),
+            ([f64::NAN, 1.0, 0.0], false),
+            ([3.0, -4.0, 12.0], true),
+        ];
+        for (a, some) in cases {
+            let a = DVec3::from_array(a);
+            let n = normalize(a);
+            assert_eq!(n.is_some(), some, "{a:?}");
+            let g = a.try_normalize();
+            assert_eq!(
+                n.map(|v| v.to_array().map(f64::to_bits)),
+                g.map(|v| v.to_array().map(f64::to_bits))
+            );
+        }
     }
 
     #[test]
@@ -367,7 +384,7 @@ mod tests {
         c.target = c.eye;
         assert_eq!(RayCamera::new(&c, 8, 8), Err(CameraError::EyeIsTarget));
         let mut c = Camera::default();
-        c.up = sub(c.target, c.eye);
+        c.up = (DVec3::from_array(c.target) - DVec3::from_array(c.eye)).to_array();
         assert_eq!(RayCamera::new(&c, 8, 8), Err(CameraError::UpParallel));
         assert_eq!(
             RayCamera::new(&Camera::default(), 0, 8),

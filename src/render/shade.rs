@@ -23,7 +23,9 @@
 //! `shadow_rays_saved`); only if it fails does each pixel test its own
 //! segment. Lights with `shadows: false` run no shadow code.
 
-use super::camera::{add, bounds_box, dot, normalize, scale, sub};
+use glam::DVec3;
+
+use super::camera::{bounds_box, normalize};
 use super::tracer::Tracer;
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_hull, box_meet, dot as dot_box, normalize_box, point_box};
@@ -43,25 +45,23 @@ const MAX_SHADOW_PIECES: usize = 4000;
 #[derive(Copy, Clone, Debug)]
 pub(crate) enum SegEnd {
     /// A point light's position.
-    Point([f64; 3]),
+    Point(DVec3),
     /// A fixed offset from the start (directional light).
-    Offset([f64; 3]),
+    Offset(DVec3),
 }
 
 /// The unit direction from `p` towards the light, and the segment end.
-pub(crate) fn light_dir(
-    tr: &Tracer<'_>,
-    kind: LightKind,
-    p: [f64; 3],
-) -> Option<([f64; 3], SegEnd)> {
+pub(crate) fn light_dir(tr: &Tracer<'_>, kind: LightKind, p: DVec3) -> Option<(DVec3, SegEnd)> {
     match kind {
         LightKind::Point(l) => {
-            let d = normalize(sub(l, p))?;
+            let l = DVec3::from_array(l);
+            let d = normalize(l - p)?;
             Some((d, SegEnd::Point(l)))
         }
         LightKind::Directional(dir) => {
-            let d = normalize(scale(dir, -1.0))?;
-            Some((d, SegEnd::Offset(scale(d, 2.0 * tr.diag))))
+            // `-x` is `x * -1.0` bit for bit (both flip the sign only).
+            let d = normalize(-DVec3::from_array(dir))?;
+            Some((d, SegEnd::Offset(d * (2.0 * tr.diag))))
         }
     }
 }
@@ -75,14 +75,14 @@ pub(crate) fn light_dir(
 pub(crate) fn segment_free(
     tr: &Tracer<'_>,
     q: IBox,
-    starts: &[[f64; 3]],
+    starts: &[DVec3],
     end: SegEnd,
     min_w: f64,
     st: &mut RenderStats,
 ) -> bool {
     let delta: IBox = match end {
         SegEnd::Point(l) => std::array::from_fn(|i| Interval::point(l[i]).sub(q[i])),
-        SegEnd::Offset(o) => point_box(o),
+        SegEnd::Offset(o) => point_box(o.to_array()),
     };
     let len = delta
         .iter()
@@ -151,7 +151,9 @@ pub(crate) fn segment_free(
         let ok = match front_ok {
             Some(v) => v,
             None => {
-                let v = starts.iter().all(|&p| start_state(tr, p, st) == Some(true));
+                let v = starts
+                    .iter()
+                    .all(|&p| start_state(tr, p.to_array(), st) == Some(true));
                 front_ok = Some(v);
                 v
             }
@@ -196,17 +198,17 @@ pub(crate) fn start_state(tr: &Tracer<'_>, q: [f64; 3], st: &mut RenderStats) ->
 #[derive(Copy, Clone, Debug)]
 pub(crate) struct Surf {
     /// Hit point.
-    pub p: [f64; 3],
+    pub p: DVec3,
     /// Unit normal facing the viewer.
-    pub n: [f64; 3],
+    pub n: DVec3,
     /// Shadow segment start.
-    pub q: [f64; 3],
+    pub q: DVec3,
     /// Unit vector towards the eye.
-    pub v: [f64; 3],
+    pub v: DVec3,
     /// Shadow segment resolution (world units).
     pub min_w: f64,
-    /// Object colour.
-    pub color: [f64; 3],
+    /// Object colour (linear RGB).
+    pub color: DVec3,
 }
 
 /// Surface geometry at a hit (normal from the point gradient).
@@ -216,34 +218,29 @@ pub(crate) fn surface(
     hit: &super::Hit,
     st: &mut RenderStats,
 ) -> Surf {
-    let p = ray.at(hit.t);
-    let dn = normalize(ray.dm).unwrap_or([0.0, 0.0, 1.0]);
-    let v = scale(dn, -1.0);
-    let dlen = super::camera::norm(ray.dm);
-    let eps = (1e-4 * tr.diag).max(2.0 * tr.cam.tolerance(hit.t) * dlen);
-    let color = tr.colors[hit.obj];
+    let p = DVec3::from_array(ray.at(hit.t));
+    let dm = DVec3::from_array(ray.dm);
+    let v = -normalize(dm).unwrap_or(DVec3::Z);
+    let eps = (1e-4 * tr.diag).max(2.0 * tr.cam.tolerance(hit.t) * dm.length());
+    let color = DVec3::from_array(tr.colors[hit.obj]);
     if hit.inside {
         // A cut face at the bounds: face the viewer, start shadows in front.
         return Surf {
             p,
             n: v,
-            q: add(p, scale(v, eps)),
+            q: p + v * eps,
             v,
             min_w: 0.5 * eps,
             color,
         };
     }
-    let g = tr.point_grad(hit.obj, p, st);
-    let nout = normalize(g.d).unwrap_or(v);
-    let n = if dot(nout, v) < 0.0 {
-        scale(nout, -1.0)
-    } else {
-        nout
-    };
+    let g = tr.point_grad(hit.obj, p.to_array(), st);
+    let nout = normalize(DVec3::from_array(g.d)).unwrap_or(v);
+    let n = if nout.dot(v) < 0.0 { -nout } else { nout };
     Surf {
         p,
         n,
-        q: add(p, scale(nout, eps)),
+        q: p + nout * eps,
         v,
         min_w: 0.5 * eps,
         color,
@@ -263,13 +260,13 @@ pub(crate) fn shadow_beam(
     let Some((_, end)) = light_dir(tr, kind, first.p) else {
         return false;
     };
-    let mut qb = point_box(first.q);
+    let mut qb = point_box(first.q.to_array());
     let mut min_w = f64::INFINITY;
     for s in surfs {
-        qb = box_hull(qb, point_box(s.q));
+        qb = box_hull(qb, point_box(s.q.to_array()));
         min_w = min_w.min(s.min_w);
     }
-    let starts: Vec<[f64; 3]> = surfs.iter().map(|s| s.q).collect();
+    let starts: Vec<DVec3> = surfs.iter().map(|s| s.q).collect();
     // A beam cannot be resolved much below its own cross-section: give up
     // (and fall back to per-pixel segments) once pieces get that short.
     let diam = qb.iter().map(|c| c.width() * c.width()).sum::<f64>().sqrt();
@@ -284,29 +281,27 @@ pub(crate) fn shade(
     s: &Surf,
     lit_by_beam: &[bool],
     st: &mut RenderStats,
-) -> ([f64; 3], u64) {
-    let mut c = scale(s.color, AMBIENT);
+) -> (DVec3, u64) {
+    let mut c = s.color * AMBIENT;
     let mut shadowed = 0u64;
     for (li, light) in tr.lights.iter().enumerate() {
         let Some((l, end)) = light_dir(tr, light.kind, s.p) else {
             continue;
         };
-        let ndl = dot(s.n, l);
+        let ndl = s.n.dot(l);
         if ndl <= 0.0 {
             continue;
         }
         if light.shadows && !lit_by_beam.get(li).copied().unwrap_or(false) {
             st.shadow_rays += 1;
-            if !segment_free(tr, point_box(s.q), &[s.q], end, s.min_w, st) {
+            if !segment_free(tr, point_box(s.q.to_array()), &[s.q], end, s.min_w, st) {
                 shadowed |= 1u64.checked_shl(li as u32).unwrap_or(0);
                 continue;
             }
         }
-        let h = normalize(add(l, s.v)).unwrap_or(s.n);
-        let spec = SPECULAR * crate::interval::powi_point(dot(s.n, h).max(0.0), SHININESS);
-        for (ch, out) in c.iter_mut().enumerate() {
-            *out += light.color[ch] * (s.color[ch] * ndl + spec);
-        }
+        let h = normalize(l + s.v).unwrap_or(s.n);
+        let spec = SPECULAR * crate::interval::powi_point(s.n.dot(h).max(0.0), SHININESS);
+        c += DVec3::from_array(light.color) * (s.color * ndl + spec);
     }
     (c, shadowed)
 }
@@ -324,7 +319,9 @@ pub(crate) fn colour_interval(
         std::array::from_fn(|i| Interval::point(color[i]).mul(Interval::point(AMBIENT)));
     for light in tr.lights {
         let l: IBox = match light.kind {
-            LightKind::Directional(dir) => normalize(scale(dir, -1.0))?.map(Interval::point),
+            LightKind::Directional(dir) => normalize(-DVec3::from_array(dir))?
+                .to_array()
+                .map(Interval::point),
             LightKind::Point(lp) => {
                 normalize_box(&std::array::from_fn(|i| Interval::point(lp[i]).sub(p[i])))?
             }
@@ -415,17 +412,21 @@ mod tests {
             };
             for _ in 0..20 {
                 let g: [f64; 3] = std::array::from_fn(|i| g0[i] + w * rnd());
-                let Some(n) = normalize(g) else { continue };
-                let v =
-                    normalize(std::array::from_fn(|i| vb[i].lo + rnd() * vb[i].width())).unwrap();
-                let p = [0.1 + 0.1 * rnd(), 0.1 + 0.1 * rnd(), 0.1 + 0.1 * rnd()];
+                let Some(n) = normalize(DVec3::from_array(g)) else {
+                    continue;
+                };
+                let v = normalize(DVec3::from_array(std::array::from_fn(|i| {
+                    vb[i].lo + rnd() * vb[i].width()
+                })))
+                .unwrap();
+                let p = DVec3::new(0.1 + 0.1 * rnd(), 0.1 + 0.1 * rnd(), 0.1 + 0.1 * rnd());
                 let surf = Surf {
                     p,
                     n,
                     q: p,
                     v,
                     min_w: 1e-3,
-                    color,
+                    color: DVec3::from_array(color),
                 };
                 let mut st = RenderStats::default();
                 let (c, _) = shade(&tr, &surf, &[true, true], &mut st);

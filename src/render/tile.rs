@@ -6,7 +6,7 @@ use std::time::Instant;
 use image::Rgb;
 
 use super::beam::{self, TileRays};
-use super::camera::{self, PixelRay};
+use super::camera::PixelRay;
 use super::shade::{self, Surf};
 use super::tracer::{PrunedEvals, TileState, Tracer};
 use super::{Class, Method, RenderOptions, output, ray};
@@ -224,8 +224,8 @@ fn shadow_beams(
             for (i, j) in b.pixels() {
                 let k = (j * tile.w + i) as usize;
                 let Some(s) = surfs[k] else { continue };
-                let facing = shade::light_dir(tr, light.kind, s.p)
-                    .is_some_and(|(l, _)| camera::dot(s.n, l) > 0.0);
+                let facing =
+                    shade::light_dir(tr, light.kind, s.p).is_some_and(|(l, _)| s.n.dot(l) > 0.0);
                 if facing {
                     members.push(k);
                     pts.push(s);
@@ -277,10 +277,10 @@ fn shade_pixels(
             let t0 = Instant::now();
             let (c, sh) = shade::shade(tr, s, &lit_by_beam[k * nl..(k + 1) * nl], st);
             shadow_ms += ms_since(t0);
-            linear[k] = c;
+            linear[k] = c.to_array();
             shadowed[k] = sh;
             if let Some(nv) = normals.as_mut() {
-                nv[k] = output::normal_pixel(Some(s.n));
+                nv[k] = output::normal_pixel(Some(s.n.to_array()));
             }
         }
     }

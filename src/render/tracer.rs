@@ -5,7 +5,9 @@
 
 use std::sync::Arc;
 
-use super::camera::{self, RayCamera};
+use glam::DVec3;
+
+use super::camera::RayCamera;
 use super::stats::RenderStats;
 use crate::eval::{Evaluator, Grad, IntervalGrad};
 use crate::interval::Interval;
@@ -113,7 +115,7 @@ impl<'a> Tracer<'a> {
             colors: scene.objects.iter().map(|o| o.color).collect(),
             lights: &scene.lights,
             bounds: b,
-            diag: camera::norm(camera::sub(b.max, b.min)),
+            diag: (DVec3::from_array(b.max) - DVec3::from_array(b.min)).length(),
             live_ops: evals
                 .iter()
                 .map(|e| e.function().map_or(0, |f| f.live_count()))
@@ -325,7 +327,7 @@ pub fn is_flat(scene: &Scene) -> bool {
 // along the missing axis). Reads the scene functions' variable use, which
 // simplification can only shrink, so it holds for the evaluators too.
 fn constant_along_rays(cam: &RayCamera, scene: &Scene) -> bool {
-    let one_direction = cam.dx == [0.0; 3] && cam.dy == [0.0; 3];
+    let one_direction = cam.dx == DVec3::ZERO && cam.dy == DVec3::ZERO;
     one_direction
         && scene.objects.iter().all(|o| {
             let uses = o.function.uses_vars();
