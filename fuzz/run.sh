@@ -68,6 +68,12 @@ for t in "${targets[@]}"; do
     if [[ -z $runs ]]; then
         runs=$(sed -n 's/^#\([0-9]*\)[[:space:]]*DONE.*/\1/p' "$log" | tail -n 1)
     fi
+    if [[ -z $runs ]]; then
+        # A crash ends the run before the final stats: the last status
+        # line (`#N NEW ...`, `#N pulse ...`) is a lower bound.
+        runs=$(sed -n 's/^#\([0-9]*\)[[:space:]].*/\1/p' "$log" | tail -n 1)
+        runs=${runs:+at least $runs}
+    fi
     if [[ $rc -ne 0 ]]; then
         failed+=("$t")
         summary+=("$t: CRASHED after ${runs:-?} inputs (exit $rc; log $PWD/$log)")
