@@ -11,10 +11,10 @@
 #![no_main]
 
 use ibeam::eval::Evaluator;
-use ibeam::interval::Interval;
 use ibeam::eval::interp::Interpreter;
-use ibeam::ir::{Function, passes, random};
 use ibeam::eval::jit::JitEvaluator;
+use ibeam::interval::Interval;
+use ibeam::ir::{Function, passes, random};
 use libfuzzer_sys::fuzz_target;
 
 /// Reads f64s from the bytes, 8 at a time, mapped to a useful range: most
