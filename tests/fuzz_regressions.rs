@@ -11,7 +11,6 @@ use ibeam::ir::random::random_function;
 /// subtract with overflow" in `Terms::pays` (src/ir/passes/terms.rs),
 /// `self.entries.len() - 1` on a sum left with no terms.
 #[test]
-#[ignore = "src/ir/passes/terms.rs Terms::pays underflows on an empty sum; un-ignore with the fix"]
 fn simplify_random_function_from_prune_fuzzer() {
     let f = random_function(8574853690238485660, 12);
     let _ = passes::simplify(&f);
@@ -22,7 +21,6 @@ fn simplify_random_function_from_prune_fuzzer() {
 /// a product by the constant 0 is a sum whose one coefficient is 0, so
 /// `flatten` keeps no term at all.
 #[test]
-#[ignore = "src/ir/passes/terms.rs Terms::pays underflows on an empty sum; un-ignore with the fix"]
 fn simplify_vm_model_times_zero() {
     let text = "_0 var-y\n_1 const 0\n_2 mul _1 _0\n";
     let scene = ibeam::lang::load_scene_source("fuzz.vm", text).expect("loads");

@@ -16,10 +16,11 @@
 
 use std::sync::Arc;
 
+use ibeam::eval::interp::Interpreter;
 use ibeam::eval::{Evaluator, Grad};
 use ibeam::interval::Interval;
 use ibeam::ir::random::{Rng, random_function};
-use ibeam::ir::semantics::{grad_binary, grad_powi, grad_unary, run_interval, run_point};
+use ibeam::ir::semantics::{run_interval, run_point};
 use ibeam::ir::{Function, Op, UnaryOp};
 
 use super::*;
@@ -97,24 +98,10 @@ pub fn ref_interval(f: &Function, b: [Interval; 3]) -> Interval {
     v[f.root.index()]
 }
 
-/// The gradient at `p` by the reference derivative rules, in forward mode.
+/// The gradient at `p` by the reference derivative rules (the shared
+/// rules of `ir::semantics`, run by the interpreter in forward mode).
 pub fn ref_grad(f: &Function, p: [f64; 3]) -> Grad {
-    let mut v: Vec<Grad> = Vec::with_capacity(f.ops.len());
-    for op in &f.ops {
-        let g = match *op {
-            Op::Var(x) => {
-                let mut d = [0.0; 3];
-                d[x.index()] = 1.0;
-                Grad { v: p[x.index()], d }
-            }
-            Op::Const(c) => Grad { v: c, d: [0.0; 3] },
-            Op::Unary(u, a) => grad_unary(u, v[a.index()]),
-            Op::Binary(o, a, b) => grad_binary(o, v[a.index()], v[b.index()]),
-            Op::Powi(a, n) => grad_powi(v[a.index()], n),
-        };
-        v.push(g);
-    }
-    v[f.root.index()]
+    Interpreter::new(f.clone()).point_grad(p)
 }
 
 /// Whether some `abs` of `f` has the argument 0 among the point values
