@@ -24,7 +24,9 @@
 //! touched.
 //!
 //! Layout: `emit` holds the CLIF building blocks (packed rounding, min/max,
-//! interval ops), `lower` the sweep over the IR per kind, `shims` the
+//! interval ops), `lower` the sweep over the IR per kind, `derive` the
+//! derivative rules over CLIF values, `evaluator` the lazily compiled
+//! table of kinds behind [`JitEvaluator`], `shims` the
 //! callbacks into Rust, and `raw` the only `unsafe` code (owning JIT memory
 //! and calling it).
 //!
@@ -35,14 +37,15 @@
 
 mod derive;
 mod emit;
+mod evaluator;
 mod lower;
+mod powers;
 #[allow(unsafe_code)] // the one module that calls JIT code and frees its memory
 mod raw;
 mod shims;
 
 use std::fmt;
-use std::sync::{Arc, OnceLock};
-use std::time::{Duration, Instant};
+use std::sync::OnceLock;
 
 use cranelift_codegen::Context;
 use cranelift_codegen::ir::{self, BlockArg, InstBuilder, UserFuncName, condcodes::IntCC, types};
@@ -52,9 +55,9 @@ use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
 use cranelift_jit::{JITBuilder, JITModule};
 use cranelift_module::{FuncId, Linkage, Module, default_libcall_names};
 
-use crate::eval::{Evaluator, Grad, IntervalGrad};
-use crate::interval::Interval;
 use crate::ir::Function;
+pub use evaluator::JitEvaluator;
+
 use emit::{Emitter, ShimRefs};
 use raw::{Code, EntryFn, IntervalBatchFn, IntervalFn, PointBatchFn, PointFn, PointGradFn};
 use shims::{SHIM_COUNT, Shim};
@@ -77,7 +80,8 @@ impl JitError {
     }
 }
 
-/// One evaluator kind; each is compiled separately and lazily.
+/// One evaluator kind; each is compiled separately and lazily. The
+/// declaration order is the index of its slot in [`JitEvaluator`].
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 pub enum Kind {
     /// f at a point.
@@ -289,50 +293,63 @@ fn build(
             b.ins().return_(&[]);
         }
         Kind::PointBatch | Kind::IntervalBatch => {
-            let n = *params.last().expect("count parameter");
-            let header = b.create_block();
-            let body = b.create_block();
-            let exit = b.create_block();
-            let i_param = b.append_block_param(header, types::I64);
-            let zero = b.ins().iconst(types::I64, 0);
-            b.ins().jump(header, &[BlockArg::Value(zero)]);
-            b.switch_to_block(header);
-            let more = b.ins().icmp(IntCC::UnsignedLessThan, i_param, n);
-            b.ins().brif(more, body, &[], exit, &[]);
-            b.switch_to_block(body);
-            b.seal_block(body);
-            // The loop calls the single-evaluation function (compiled into
-            // the same module) rather than inlining its body: the call costs
-            // a few ns against the microseconds a large body takes, and the
-            // loop stays small enough to read in `--clif` output.
             let callee = callee.expect("batch kinds are built with a body function");
-            if kind == Kind::PointBatch {
-                let off = b.ins().ishl_imm_u(i_param, 3);
-                let addr = |b: &mut FunctionBuilder, base: ir::Value| b.ins().iadd(base, off);
-                let ptrs = [0, 1, 2, 3].map(|k| addr(&mut b, params[k]));
-                let mut e = Emitter::new(&mut b, shims, int_select);
-                let xyz = [0, 1, 2].map(|k| e.load(ptrs[k], 0));
-                let call = b.ins().call(callee, &xyz);
-                let v = b.inst_results(call)[0];
-                let mut e = Emitter::new(&mut b, shims, int_select);
-                e.store(v, ptrs[3], 0);
-            } else {
-                let in_off = b.ins().imul_imm_u(i_param, 48);
-                let out_off = b.ins().ishl_imm_u(i_param, 4);
-                let inp = b.ins().iadd(params[0], in_off);
-                let outp = b.ins().iadd(params[1], out_off);
-                b.ins().call(callee, &[inp, outp]);
-            }
-            let next = b.ins().iadd_imm_u(i_param, 1);
-            b.ins().jump(header, &[BlockArg::Value(next)]);
-            b.seal_block(header);
-            b.switch_to_block(exit);
-            b.seal_block(exit);
-            b.ins().return_(&[]);
+            batch_loop(&mut b, kind, &params, callee, shims, int_select);
         }
     }
     b.finalize(fe_config);
     func
+}
+
+/// The loop of a batch kind: calls the single-evaluation `callee` once per
+/// element, `params` being the batch entry's (pointers, then the count).
+fn batch_loop(
+    b: &mut FunctionBuilder,
+    kind: Kind,
+    params: &[ir::Value],
+    callee: ir::FuncRef,
+    shims: ShimRefs,
+    int_select: bool,
+) {
+    let n = *params.last().expect("count parameter");
+    let header = b.create_block();
+    let body = b.create_block();
+    let exit = b.create_block();
+    let i_param = b.append_block_param(header, types::I64);
+    let zero = b.ins().iconst(types::I64, 0);
+    b.ins().jump(header, &[BlockArg::Value(zero)]);
+    b.switch_to_block(header);
+    let more = b.ins().icmp(IntCC::UnsignedLessThan, i_param, n);
+    b.ins().brif(more, body, &[], exit, &[]);
+    b.switch_to_block(body);
+    b.seal_block(body);
+    // The loop calls the single-evaluation function (compiled into
+    // the same module) rather than inlining its body: the call costs
+    // a few ns against the microseconds a large body takes, and the
+    // loop stays small enough to read in `--clif` output.
+    if kind == Kind::PointBatch {
+        let off = b.ins().ishl_imm_u(i_param, 3);
+        let addr = |b: &mut FunctionBuilder, base: ir::Value| b.ins().iadd(base, off);
+        let ptrs = [0, 1, 2, 3].map(|k| addr(b, params[k]));
+        let mut e = Emitter::new(b, shims, int_select);
+        let xyz = [0, 1, 2].map(|k| e.load(ptrs[k], 0));
+        let call = b.ins().call(callee, &xyz);
+        let v = b.inst_results(call)[0];
+        let mut e = Emitter::new(b, shims, int_select);
+        e.store(v, ptrs[3], 0);
+    } else {
+        let in_off = b.ins().imul_imm_u(i_param, 48);
+        let out_off = b.ins().ishl_imm_u(i_param, 4);
+        let inp = b.ins().iadd(params[0], in_off);
+        let outp = b.ins().iadd(params[1], out_off);
+        b.ins().call(callee, &[inp, outp]);
+    }
+    let next = b.ins().iadd_imm_u(i_param, 1);
+    b.ins().jump(header, &[BlockArg::Value(next)]);
+    b.seal_block(header);
+    b.switch_to_block(exit);
+    b.seal_block(exit);
+    b.ins().return_(&[]);
 }
 
 /// The single-evaluation kind a batch kind loops over.
@@ -432,205 +449,6 @@ pub fn clif_text(f: &Function) -> Result<String, JitError> {
         ));
     }
     Ok(out)
-}
-
-/// A lazily compiled evaluator kind and how long its compilation took.
-struct Slot<F> {
-    code: Result<Code<F>, JitError>,
-    time: Duration,
-}
-
-/// Native evaluators of one function, each kind compiled on first use.
-///
-/// If Cranelift rejects a kind (an internal bug, never bad input: the IR is
-/// validated in [`JitEvaluator::new`]), that kind answers with NaN points and
-/// whole-line intervals, which are sound; [`JitEvaluator::compile_all`]
-/// reports the error.
-pub struct JitEvaluator {
-    f: Arc<Function>,
-    live: Arc<[bool]>,
-    point: OnceLock<Slot<PointFn>>,
-    point_grad: OnceLock<Slot<PointGradFn>>,
-    interval: OnceLock<Slot<IntervalFn>>,
-    interval_grad: OnceLock<Slot<IntervalFn>>,
-    interval_dir: OnceLock<Slot<IntervalFn>>,
-    point_batch: OnceLock<Slot<PointBatchFn>>,
-    interval_batch: OnceLock<Slot<IntervalBatchFn>>,
-}
-
-fn get<'a, F: EntryFn>(
-    cell: &'a OnceLock<Slot<F>>,
-    kind: Kind,
-    f: &Function,
-    live: &[bool],
-) -> Option<&'a Code<F>> {
-    cell.get_or_init(|| {
-        let t = Instant::now();
-        let code = compile(kind, f, live);
-        Slot {
-            code,
-            time: t.elapsed(),
-        }
-    })
-    .code
-    .as_ref()
-    .ok()
-}
-
-impl JitEvaluator {
-    /// Prepares an evaluator for `f` (validated here); compiles nothing yet.
-    pub fn new(f: &Function) -> Result<JitEvaluator, JitError> {
-        crate::ir::validate::validate(f).map_err(|e| JitError::new("invalid IR", e))?;
-        isa()?;
-        Ok(JitEvaluator {
-            live: lower::live_ops(f).into(),
-            f: Arc::new(f.clone()),
-            point: OnceLock::new(),
-            point_grad: OnceLock::new(),
-            interval: OnceLock::new(),
-            interval_grad: OnceLock::new(),
-            interval_dir: OnceLock::new(),
-            point_batch: OnceLock::new(),
-            interval_batch: OnceLock::new(),
-        })
-    }
-
-    /// The function being evaluated.
-    pub fn function(&self) -> &Function {
-        &self.f
-    }
-
-    fn slot_info(&self, kind: Kind) -> Option<(Duration, Option<&JitError>)> {
-        fn info<F>(c: &OnceLock<Slot<F>>) -> Option<(Duration, Option<&JitError>)> {
-            c.get().map(|s| (s.time, s.code.as_ref().err()))
-        }
-        match kind {
-            Kind::Point => info(&self.point),
-            Kind::PointGrad => info(&self.point_grad),
-            Kind::Interval => info(&self.interval),
-            Kind::IntervalGrad => info(&self.interval_grad),
-            Kind::IntervalDir => info(&self.interval_dir),
-            Kind::PointBatch => info(&self.point_batch),
-            Kind::IntervalBatch => info(&self.interval_batch),
-        }
-    }
-
-    /// The kinds compiled so far and how long each took to compile.
-    pub fn compile_times(&self) -> Vec<(&'static str, Duration)> {
-        Kind::ALL
-            .into_iter()
-            .filter_map(|k| self.slot_info(k).map(|(t, _)| (k.name(), t)))
-            .collect()
-    }
-
-    /// Compiles the given kind now (if not yet done).
-    pub fn compile(&self, kind: Kind) -> Result<(), JitError> {
-        let (f, l) = (&*self.f, &*self.live);
-        match kind {
-            Kind::Point => drop(get(&self.point, kind, f, l)),
-            Kind::PointGrad => drop(get(&self.point_grad, kind, f, l)),
-            Kind::Interval => drop(get(&self.interval, kind, f, l)),
-            Kind::IntervalGrad => drop(get(&self.interval_grad, kind, f, l)),
-            Kind::IntervalDir => drop(get(&self.interval_dir, kind, f, l)),
-            Kind::PointBatch => drop(get(&self.point_batch, kind, f, l)),
-            Kind::IntervalBatch => drop(get(&self.interval_batch, kind, f, l)),
-        }
-        match self.slot_info(kind) {
-            Some((_, Some(e))) => Err(e.clone()),
-            _ => Ok(()),
-        }
-    }
-
-    /// Compiles every kind (for `ibeam ir --stats`) and returns the
-    /// compile time of each, or the first error.
-    pub fn compile_all(&self) -> Result<Vec<(&'static str, Duration)>, JitError> {
-        for kind in Kind::ALL {
-            self.compile(kind)?;
-        }
-        Ok(self.compile_times())
-    }
-}
-
-impl Evaluator for JitEvaluator {
-    fn point(&self, p: [f64; 3]) -> f64 {
-        match get(&self.point, Kind::Point, &self.f, &self.live) {
-            Some(c) => c.call(p),
-            None => f64::NAN,
-        }
-    }
-
-    fn point_grad(&self, p: [f64; 3]) -> Grad {
-        match get(&self.point_grad, Kind::PointGrad, &self.f, &self.live) {
-            Some(c) => {
-                let r = c.call(p);
-                Grad {
-                    v: r[0],
-                    d: [r[1], r[2], r[3]],
-                }
-            }
-            None => Grad {
-                v: f64::NAN,
-                d: [f64::NAN; 3],
-            },
-        }
-    }
-
-    fn interval(&self, b: [Interval; 3]) -> Interval {
-        match get(&self.interval, Kind::Interval, &self.f, &self.live) {
-            Some(c) => c.call_interval(&b),
-            None => Interval::ENTIRE,
-        }
-    }
-
-    fn interval_grad(&self, b: [Interval; 3]) -> IntervalGrad {
-        match get(&self.interval_grad, Kind::IntervalGrad, &self.f, &self.live) {
-            Some(c) => c.call_interval_grad(&b),
-            None => IntervalGrad {
-                v: Interval::ENTIRE,
-                d: [Interval::ENTIRE; 3],
-            },
-        }
-    }
-
-    fn interval_dir(&self, b: [Interval; 3], v: [Interval; 3]) -> [Interval; 2] {
-        match get(&self.interval_dir, Kind::IntervalDir, &self.f, &self.live) {
-            Some(c) => c.call_interval_dir(&[b[0], b[1], b[2], v[0], v[1], v[2]]),
-            None => [Interval::ENTIRE; 2],
-        }
-    }
-
-    fn function(&self) -> Option<&Function> {
-        Some(&self.f)
-    }
-
-    fn is_native(&self) -> bool {
-        true
-    }
-
-    fn compile_time(&self) -> Duration {
-        self.compile_times().iter().map(|(_, t)| *t).sum()
-    }
-
-    /// Evaluates `min(len)` points of the four slices in one native loop.
-    fn point_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
-        match get(&self.point_batch, Kind::PointBatch, &self.f, &self.live) {
-            Some(c) => c.call(xs, ys, zs, out),
-            None => out.fill(f64::NAN),
-        }
-    }
-
-    /// Evaluates `min(len)` boxes in one native loop.
-    fn interval_batch(&self, boxes: &[[Interval; 3]], out: &mut [Interval]) {
-        match get(
-            &self.interval_batch,
-            Kind::IntervalBatch,
-            &self.f,
-            &self.live,
-        ) {
-            Some(c) => c.call(boxes, out),
-            None => out.fill(Interval::ENTIRE),
-        }
-    }
 }
 
 #[cfg(test)]
