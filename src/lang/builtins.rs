@@ -245,6 +245,24 @@ impl Builtin {
 }
 
 impl<'a> Lowerer<'_, 'a> {
+    /// A constant argument that must be positive and finite (`what` names
+    /// it in the error, `help` says what to do instead).
+    fn positive_arg(
+        &mut self,
+        arg: &'a Expr,
+        (ctx, env): (&Ctx<'a>, Env),
+        what: &str,
+        help: &str,
+    ) -> Result<f64, Diag> {
+        let k = self.constant_arg(arg, ctx, env, what)?;
+        if !(k > 0.0 && k.is_finite()) {
+            return Err(ctx
+                .diag(arg.span, format!("{what} must be positive, but it is {k}"))
+                .with_help(help));
+        }
+        Ok(k)
+    }
+
     /// `blend(a, b, k)`.
     fn blend(
         &mut self,
@@ -253,15 +271,12 @@ impl<'a> Lowerer<'_, 'a> {
         ctx: &Ctx<'a>,
         env: Env,
     ) -> Result<Val, Diag> {
-        let k = self.constant_arg(&args[2], ctx, env, "the blend radius")?;
-        if !(k > 0.0 && k.is_finite()) {
-            return Err(ctx
-                .diag(
-                    args[2].span,
-                    format!("the blend radius must be positive, but it is {k}"),
-                )
-                .with_help("use `union(a, b)` for a sharp join"));
-        }
+        let k = self.positive_arg(
+            &args[2],
+            (ctx, env),
+            "the blend radius",
+            "use `union(a, b)` for a sharp join",
+        )?;
         let a = self.lower(&args[0], ctx, env)?;
         let b = self.lower(&args[1], ctx, env)?;
         // h = max(k - |a - b|, 0) / k;  min(a, b) - h² k/4
@@ -296,15 +311,12 @@ impl<'a> Lowerer<'_, 'a> {
         ctx: &Ctx<'a>,
         env: Env,
     ) -> Result<Val, Diag> {
-        let k = self.constant_arg(&args[1], ctx, env, "the scale factor")?;
-        if !(k > 0.0 && k.is_finite()) {
-            return Err(ctx
-                .diag(
-                    args[1].span,
-                    format!("the scale factor must be positive, but it is {k}"),
-                )
-                .with_help("mirroring is not supported; scale by a positive number"));
-        }
+        let k = self.positive_arg(
+            &args[1],
+            (ctx, env),
+            "the scale factor",
+            "mirroring is not supported; scale by a positive number",
+        )?;
         let mut new_env = env;
         for slot in new_env.iter_mut() {
             let c = self.coord(*slot);
