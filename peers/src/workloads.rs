@@ -58,37 +58,14 @@ impl Workload {
     }
 }
 
-/// SplitMix64: a tiny deterministic generator, so the same seed gives the
-/// same spheres on every machine and for both renderers.
-pub struct SplitMix64(u64);
-
-impl SplitMix64 {
-    /// A generator started at `seed`.
-    pub fn new(seed: u64) -> SplitMix64 {
-        SplitMix64(seed)
-    }
-
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1), 53 bits.
-    pub fn next_unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-}
-
 /// `n` sphere centres from `seed`, each coordinate rounded to 6 decimals
 /// so that the scene text holds exactly the numbers Fidget is given.
 pub fn sphere_centres(n: usize, seed: u64) -> Vec<[f64; 3]> {
-    let mut rng = SplitMix64::new(seed);
+    // ibeam's SplitMix64: the same seed gives the same spheres on every
+    // machine and for both renderers.
+    let mut rng = ibeam::ir::random::Rng::new(seed);
     let mut coord = || {
-        let v = (2.0 * rng.next_unit() - 1.0) * CENTRE_EXTENT;
+        let v = (2.0 * rng.unit() - 1.0) * CENTRE_EXTENT;
         (v * 1e6).round() / 1e6
     };
     (0..n).map(|_| [coord(), coord(), coord()]).collect()
