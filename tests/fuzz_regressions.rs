@@ -26,3 +26,29 @@ fn simplify_vm_model_times_zero() {
     let scene = ibeam::lang::load_scene_source("fuzz.vm", text).expect("loads");
     build_evaluators(&scene, EvalKind::Interp).expect("valid IR");
 }
+
+/// fuzz target `prune` (found at the end of this session, not yet fixed):
+/// a function pruned to this box gives NaN at a corner of the box where
+/// the whole function gives 0.445. Pruning must give the same bits.
+#[test]
+#[ignore = "open: ir::prune loses exactness on this box (see the session note on issue 14)"]
+fn pruned_function_keeps_its_bits_at_a_box_corner() {
+    use ibeam::eval::Evaluator;
+    use ibeam::eval::interp::Interpreter;
+    use ibeam::interval::Interval;
+    let f = random_function(108843400875938916, 8);
+    let b = [
+        Interval::new(-0.6470588235294117, -0.1470588235294117),
+        Interval::new(-0.8588235294117648, 2.1411764705882352),
+        Interval::new(-0.0117647058823529, 0.4882352941176471),
+    ];
+    let p = [-0.6470588235294117, 2.1411764705882352, -0.0117647058823529];
+    let whole = Interpreter::new(f.clone()).point(p);
+    if let Some(pruned) = ibeam::ir::prune::prune(&f, b) {
+        let v = Interpreter::new(pruned.function).point(p);
+        assert!(
+            v.to_bits() == whole.to_bits() || (v.is_nan() && whole.is_nan()),
+            "{whole} vs {v}"
+        );
+    }
+}
