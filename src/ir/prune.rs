@@ -44,6 +44,12 @@ pub struct Facts {
     /// while the interval of such a sum may dip below 0 by rounding, which
     /// alone would leave `sqrt(x² + y²)` unproven.
     pub nonneg: bool,
+    /// The value's point bits lie in its interval (or are NaN) at every
+    /// point of the box. Only a division by a signed zero breaks this:
+    /// the interval of `a / [0, b]` is a half-line, while the point value
+    /// at `-0` is the infinity of the other sign. A `min`/`max` may only
+    /// be decided in favour of a contained operand.
+    pub contained: bool,
 }
 
 /// The facts of `op`'s value over a box, from its own interval `value`
@@ -71,15 +77,24 @@ pub fn facts(op: &Op, value: Interval, arg: impl Fn(ValueId) -> (Interval, Facts
         Op::Powi(a, n) if n < 0 => arg(a).0.lo > 0.0 || arg(a).0.hi < 0.0,
         _ => true,
     };
+    let zero_in = |i: Interval| i.lo <= 0.0 && i.hi >= 0.0;
+    let signed_zero_pole = match *op {
+        Op::Binary(BinaryOp::Div, _, d) => zero_in(arg(d).0),
+        Op::Binary(BinaryOp::Pow, base, _) => arg(base).0.lo <= 0.0,
+        Op::Powi(a, n) => n < 0 && zero_in(arg(a).0),
+        _ => false,
+    };
     Facts {
         defined: args_defined && domain && finite(value),
         nonneg,
+        contained: !signed_zero_pole && op.operands().all(|a| arg(a).1.contained),
     }
 }
 
 /// The operand (0 or 1) that `op` (`min` or `max`) picks at every point of
 /// a box where its operands have these intervals and facts, if one is
-/// proven to (the other must be proven defined: a NaN would win).
+/// proven to (the other must be proven defined: a NaN would win; and the
+/// winner's point values must lie in its interval).
 pub fn decided_operand(op: BinaryOp, x: (Interval, Facts), y: (Interval, Facts)) -> Option<usize> {
     let (a, c) = (x.0, y.0);
     let (x_wins, y_wins) = match op {
@@ -87,9 +102,9 @@ pub fn decided_operand(op: BinaryOp, x: (Interval, Facts), y: (Interval, Facts))
         BinaryOp::Max => (a.lo > c.hi, c.lo > a.hi),
         _ => return None,
     };
-    if x_wins && y.1.defined {
+    if x_wins && y.1.defined && x.1.contained {
         Some(0)
-    } else if y_wins && x.1.defined {
+    } else if y_wins && x.1.defined && y.1.contained {
         Some(1)
     } else {
         None
