@@ -12,9 +12,9 @@ use ibeam::eval::Evaluator;
 use ibeam::eval::interp::Interpreter;
 use ibeam::eval::jit::JitEvaluator;
 use ibeam::eval::regional::Regional;
+use ibeam::eval::tape::{Tape, Workspace};
 use ibeam::interval::Interval;
 use ibeam::ir::Function;
-use ibeam::ir::prune::prune;
 use ibeam::ir::random::{Rng, random_function};
 
 use common::{EDGE_VALUES, random_box};
@@ -56,12 +56,14 @@ const REGION: [Interval; 3] = [
 /// inside it, of an `abs` whose argument is exactly 0 (e.g. |x| over
 /// x = [-0, -0], y unbounded, against the point (-0, 0, 0)).
 fn regional(f: &Function) -> Arc<dyn Evaluator> {
-    let pruned = prune(f, REGION).map_or_else(|| f.clone(), |p| p.function);
-    Arc::new(Regional {
-        region: REGION,
-        pruned: Interpreter::new(pruned),
-        whole: Arc::new(Interpreter::new(f.clone())),
-    })
+    let whole = Tape::new(f);
+    let mut ws = Workspace::default();
+    let pruned = whole.prune(REGION, &mut ws).map_or(whole, |p| p.tape);
+    Arc::new(Regional::new(
+        REGION,
+        pruned,
+        Arc::new(Interpreter::new(f.clone())),
+    ))
 }
 
 mod regional {
@@ -78,7 +80,10 @@ mod regional {
         let pruned = (0..300)
             .filter(|&seed| {
                 let f = random_function(seed, 8);
-                prune(&f, REGION).is_some_and(|p| p.function.len() < f.len())
+                let whole = Tape::new(&f);
+                whole
+                    .prune(REGION, &mut Workspace::default())
+                    .is_some_and(|p| p.tape.len() < whole.len())
             })
             .count();
         assert!(pruned >= 30, "only {pruned} of 300 random functions pruned");

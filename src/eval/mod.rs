@@ -55,9 +55,19 @@ pub trait Evaluator: Send + Sync {
         None
     }
 
-    /// The evaluator of the whole function, for one that holds a pruned
-    /// function.
-    fn whole(&self) -> Option<&std::sync::Arc<dyn Evaluator>> {
+    /// The evaluator a pruned one was pruned from, which answers outside
+    /// its [`Evaluator::valid_region`].
+    fn parent(&self) -> Option<&std::sync::Arc<dyn Evaluator>> {
+        None
+    }
+
+    /// The tape of a pruned evaluator (the renderer prunes it further).
+    fn tape(&self) -> Option<&tape::Tape> {
+        None
+    }
+
+    /// The evaluator as a tree of pruned regions, if it is one.
+    fn as_regional(&self) -> Option<&regional::Regional> {
         None
     }
 

@@ -1,39 +1,138 @@
-//! An evaluator that answers with a function pruned to a region (see
-//! [`crate::ir::prune`]) for points and boxes inside that region, and
-//! with the whole function everywhere else.
+//! An evaluator that answers with a tape pruned to a region (see
+//! [`crate::eval::tape`] and [`crate::ir::prune`]) for points and boxes
+//! inside that region, and with its parent everywhere else.
 //!
-//! The pruned function gives the same bits as the whole one on its region,
+//! The pruned tape gives the same bits as the whole function on its region,
 //! so the choice is invisible in point values; intervals over boxes inside
-//! the region come out tighter. Falling back outside the region is what
-//! lets the tracer prune to a block's beam near the surface while single
-//! rays still sweep from where they enter the bounds.
+//! the region come out tighter. Regions nest two ways:
+//! - the parent is the evaluator the tape was pruned from (a tile's, whose
+//!   parent is the whole function's), so an evaluation just outside a
+//!   block's region still runs the tile's short tape, not the whole
+//!   function;
+//! - a region may hold sub-regions, each with a tape pruned from its own
+//!   (the tracer cuts a tile's beam into slices along the rays), and an
+//!   evaluation runs the tape of the smallest one that holds its box.
+//!
+//! A region whose tape is not much shorter than what answers above it
+//! (native code runs several times faster per op than the interpreter)
+//! keeps its tape only to prune its sub-regions from, and lets the
+//! evaluator above it answer.
 
 use std::sync::Arc;
 
 use crate::eval::interp::Interpreter;
+use crate::eval::tape::Tape;
 use crate::eval::{Evaluator, Grad, IntervalGrad};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_within, point_box};
 use crate::ir::Function;
 
-/// `pruned` on `region`, `whole` elsewhere.
+/// `tape` on `region` (or on the smallest sub-region holding a box),
+/// `parent` elsewhere.
 pub struct Regional {
-    /// Where `pruned` equals the whole function.
-    pub region: IBox,
-    /// The function pruned to `region`, interpreted.
-    pub pruned: Interpreter,
-    /// The whole function (native code, usually).
-    pub whole: Arc<dyn Evaluator>,
+    region: IBox,
+    tape: Tape,
+    // What evaluates boxes inside the region: the tape's ops interpreted,
+    // or, for a region that did not shrink enough, what answers above it.
+    answer: Arc<dyn Evaluator>,
+    // Whether `answer` is this region's own tape.
+    own: bool,
+    // Ops of the function `answer` evaluates.
+    answer_len: usize,
+    parent: Arc<dyn Evaluator>,
+    children: Vec<Regional>,
 }
 
 impl Regional {
-    /// The evaluator for a box: the pruned one if the box lies in the
-    /// region.
+    /// `tape` (exact on `region`) with `parent` answering outside it.
+    pub fn new(region: IBox, tape: Tape, parent: Arc<dyn Evaluator>) -> Regional {
+        Regional {
+            region,
+            answer: Arc::new(Interpreter::new(tape.function().clone())),
+            own: true,
+            answer_len: tape.len(),
+            tape,
+            parent,
+            children: Vec::new(),
+        }
+    }
+
+    /// A region that keeps `tape` only to prune from and lets `answer`
+    /// (an evaluator exact on the region, usually the parent's, of a
+    /// function of `answer_len` ops) evaluate.
+    pub fn delegating(
+        region: IBox,
+        tape: Tape,
+        (answer, answer_len): (Arc<dyn Evaluator>, usize),
+        parent: Arc<dyn Evaluator>,
+    ) -> Regional {
+        Regional {
+            region,
+            tape,
+            answer,
+            own: false,
+            answer_len,
+            parent,
+            children: Vec::new(),
+        }
+    }
+
+    /// The same region with these sub-regions (each inside it, exact on
+    /// its own region; their parents are never asked, as a box reaches a
+    /// sub-region only through this one).
+    pub fn with_children(mut self, children: Vec<Regional>) -> Regional {
+        self.children = children;
+        self
+    }
+
+    /// What answers inside the region (the own tape, or what answers
+    /// above it).
+    pub fn answer(&self) -> &Arc<dyn Evaluator> {
+        &self.answer
+    }
+
+    /// Ops of the function that answers inside the region.
+    pub fn answer_len(&self) -> usize {
+        self.answer_len
+    }
+
+    /// Whether the region answers with its own tape.
+    pub fn answers_itself(&self) -> bool {
+        self.own
+    }
+
+    /// The region.
+    pub fn region(&self) -> IBox {
+        self.region
+    }
+
+    /// The pruned tape.
+    pub fn pruned_tape(&self) -> &Tape {
+        &self.tape
+    }
+
+    /// The smallest region of the tree (this one or a sub-region, nested)
+    /// that holds `b`; `b` must lie in this region.
+    pub fn smallest_holding(&self, b: &IBox) -> &Regional {
+        let mut node = self;
+        'down: loop {
+            for c in &node.children {
+                if box_within(b, &c.region) {
+                    node = c;
+                    continue 'down;
+                }
+            }
+            return node;
+        }
+    }
+
+    /// The evaluator for a box: the smallest region's if the box lies in
+    /// the region, else the parent.
     fn for_box(&self, b: &IBox) -> &dyn Evaluator {
         if box_within(b, &self.region) {
-            &self.pruned
+            self.smallest_holding(b).answer.as_ref()
         } else {
-            self.whole.as_ref()
+            self.parent.as_ref()
         }
     }
 
@@ -66,14 +165,26 @@ impl Evaluator for Regional {
 
     /// The pruned function (exact on [`Evaluator::valid_region`]).
     fn function(&self) -> Option<&Function> {
-        Some(self.pruned.function())
+        Some(self.tape.function())
+    }
+
+    fn tape(&self) -> Option<&Tape> {
+        Some(&self.tape)
     }
 
     fn valid_region(&self) -> Option<IBox> {
         Some(self.region)
     }
 
-    fn whole(&self) -> Option<&Arc<dyn Evaluator>> {
-        Some(&self.whole)
+    fn parent(&self) -> Option<&Arc<dyn Evaluator>> {
+        Some(&self.parent)
+    }
+
+    fn is_native(&self) -> bool {
+        self.answer.is_native()
+    }
+
+    fn as_regional(&self) -> Option<&Regional> {
+        Some(self)
     }
 }

@@ -74,7 +74,7 @@ pub struct Tape {
 
 /// Per-thread scratch space for batch evaluation: one column of the batch
 /// per register, reused across calls.
-#[derive(Default, Debug)]
+#[derive(Clone, Default, Debug)]
 pub struct Workspace {
     points: Vec<f64>,
     intervals: Vec<Interval>,

@@ -200,7 +200,7 @@ fn split_pruned(
 ) {
     let pruned = tr
         .beam_region(xs, ys, window)
-        .and_then(|region| tr.pruned_to(region, &mut st.stats));
+        .and_then(|region| tr.pruned_to(region, st));
     match pruned {
         Some((evals, live_ops)) => {
             let local = tr.with_evals(&evals, live_ops);

@@ -383,6 +383,7 @@ mod tests {
             bounds: Bounds::default(),
             diag: 7.0,
             live_ops: vec![0; 1],
+            tapes: vec![None],
             prune: false,
             flat: false,
         };

@@ -171,8 +171,7 @@ fn prune_to_tile(
     }
     let xs = (f64::from(tile.x0) + 0.5, f64::from(tile.x0 + tile.w) - 0.5);
     let ys = (f64::from(tile.y0) + 0.5, f64::from(tile.y0 + th) - 0.5);
-    let region = tr.beam_region(xs, ys, Interval::new(t0, t1))?;
-    tr.pruned_to(region, &mut st.stats)
+    tr.pruned_to_beam(xs, ys, Interval::new(t0, t1), st)
 }
 
 // Finds every pixel's first hit with `method`.

@@ -9,6 +9,8 @@ use glam::DVec3;
 
 use super::camera::RayCamera;
 use super::stats::RenderStats;
+use crate::eval::regional::Regional;
+use crate::eval::tape::{Tape, Workspace};
 use crate::eval::{Evaluator, Grad, IntervalGrad};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_within, point_box};
@@ -53,6 +55,8 @@ pub(crate) struct Tracer<'a> {
     pub diag: f64,
     /// Live ops of each evaluator's function (0 when it has none).
     pub live_ops: Vec<usize>,
+    /// The tape of each whole function that is large enough to prune.
+    pub tapes: Vec<Option<Arc<Tape>>>,
     /// Prune large functions to tiles and blocks.
     pub prune: bool,
     /// Every object is proven constant along every ray inside the bounds
@@ -97,6 +101,8 @@ pub(crate) struct TileState {
     pub stats: RenderStats,
     /// The tile's record of the mean-value form (policy, not a counter).
     pub mean_value: MeanValuePolicy,
+    /// Scratch space for pruning tapes.
+    pub workspace: Workspace,
 }
 
 impl<'a> Tracer<'a> {
@@ -109,6 +115,18 @@ impl<'a> Tracer<'a> {
         prune: bool,
     ) -> Tracer<'a> {
         let b = scene.bounds;
+        let live_ops: Vec<usize> = evals
+            .iter()
+            .map(|e| e.function().map_or(0, |f| f.live_count()))
+            .collect();
+        let tapes = evals
+            .iter()
+            .zip(&live_ops)
+            .map(|(e, &n)| {
+                let f = e.function().filter(|_| prune && n >= PRUNE_MIN_OPS)?;
+                Some(Arc::new(Tape::new(f)))
+            })
+            .collect();
         Tracer {
             cam,
             evals,
@@ -116,10 +134,8 @@ impl<'a> Tracer<'a> {
             lights: &scene.lights,
             bounds: b,
             diag: (DVec3::from_array(b.max) - DVec3::from_array(b.min)).length(),
-            live_ops: evals
-                .iter()
-                .map(|e| e.function().map_or(0, |f| f.live_count()))
-                .collect(),
+            live_ops,
+            tapes,
             prune,
             flat: constant_along_rays(&cam, scene),
         }
@@ -132,6 +148,7 @@ impl<'a> Tracer<'a> {
             cam,
             colors: self.colors.clone(),
             live_ops: self.live_ops.clone(),
+            tapes: self.tapes.clone(),
             ..*self
         }
     }
@@ -150,6 +167,7 @@ impl<'a> Tracer<'a> {
             evals,
             colors: self.colors.clone(),
             live_ops,
+            tapes: self.tapes.clone(),
             ..*self
         }
     }
@@ -261,57 +279,178 @@ impl<'a> Tracer<'a> {
     }
 
     /// The scene's evaluators with every function that shrinks enough
-    /// pruned to `region` (see [`crate::ir::prune`]) and run by the
-    /// interpreter, and their live op counts; `None` when none does. Exact
-    /// on the region: use them only for evaluations inside it.
-    pub(crate) fn pruned_to(&self, region: IBox, st: &mut RenderStats) -> Option<PrunedEvals> {
+    /// pruned to `region` (see [`crate::eval::tape`]), and their live op
+    /// counts; `None` when none does. Each is pruned from the nearest
+    /// evaluator up its chain of parents whose region holds `region` (the
+    /// whole function at the top), which also answers outside `region`.
+    pub(crate) fn pruned_to(&self, region: IBox, st: &mut TileState) -> Option<PrunedEvals> {
         if !self.prune || !self.live_ops.iter().any(|&n| n >= PRUNE_MIN_OPS) {
             return None;
         }
         let mut any = false;
         let mut live = self.live_ops.clone();
-        let evals = self
-            .evals
-            .iter()
-            .zip(live.iter_mut())
-            .map(|(e, n)| {
-                let before = *n;
-                if before < PRUNE_MIN_OPS {
-                    return None;
+        let mut evals = Vec::with_capacity(self.evals.len());
+        for (k, e) in self.evals.iter().enumerate() {
+            let pruned = (live[k] >= PRUNE_MIN_OPS)
+                .then(|| self.prune_one(k, e, region, st))
+                .flatten();
+            match pruned {
+                Some((p, n)) => {
+                    any = true;
+                    live[k] = n;
+                    evals.push(p);
                 }
-                // Prune what `e` already pruned when the new region lies in
-                // the old one; else start again from the whole function.
-                let whole = e.whole().cloned().unwrap_or_else(|| Arc::clone(e));
-                let (source, before) = match e.valid_region() {
-                    Some(r) if !box_within(&region, &r) => {
-                        let f = whole.function()?;
-                        (f, f.live_count())
-                    }
-                    _ => (e.function()?, before),
-                };
-                let gain = if whole.is_native() {
-                    PRUNE_GAIN_NATIVE
-                } else {
-                    PRUNE_GAIN_INTERPRETED
-                };
-                let p = crate::ir::prune::prune_to_at_most(source, region, before / gain)?;
-                let after = p.function.live_count();
-                any = true;
-                *n = after;
-                st.pruned_ops_before += before as u64;
-                st.pruned_ops_after += after as u64;
-                Some(Arc::new(crate::eval::regional::Regional {
-                    region,
-                    pruned: crate::eval::interp::Interpreter::new(p.function),
-                    whole,
-                }) as Arc<dyn Evaluator>)
-            })
-            .collect::<Vec<Option<Arc<dyn Evaluator>>>>()
-            .into_iter()
-            .zip(self.evals)
-            .map(|(p, e)| p.unwrap_or_else(|| Arc::clone(e)))
-            .collect();
+                None => evals.push(Arc::clone(e)),
+            }
+        }
         any.then_some((evals, live))
+    }
+
+    // Object `k`'s evaluator `e` pruned to `region`, and its op count, if
+    // that shrinks it enough: pruned from the smallest region that holds
+    // `region` (up `e`'s parents, then down its tree of sub-regions).
+    fn prune_one(
+        &self,
+        k: usize,
+        e: &Arc<dyn Evaluator>,
+        region: IBox,
+        st: &mut TileState,
+    ) -> Option<(Arc<dyn Evaluator>, usize)> {
+        let mut source = e;
+        while let (Some(r), Some(p)) = (source.valid_region(), source.parent()) {
+            if box_within(&region, &r) {
+                break;
+            }
+            source = p;
+        }
+        let (tape, answer, before) = match source.as_regional() {
+            Some(tree) => {
+                let node = tree.smallest_holding(&region);
+                (node.pruned_tape(), node.answer(), node.answer_len())
+            }
+            None => {
+                let tape = self.tapes[k].as_deref()?;
+                (tape, source, tape.len())
+            }
+        };
+        let p = tape.prune(region, &mut st.workspace)?;
+        let after = p.tape.len();
+        if after * gain(answer.as_ref()) > before {
+            return None;
+        }
+        st.stats.pruned_ops_before += before as u64;
+        st.stats.pruned_ops_after += after as u64;
+        let pruned = Regional::new(region, p.tape, Arc::clone(source));
+        Some((Arc::new(pruned) as Arc<dyn Evaluator>, after))
+    }
+
+    /// The scene's evaluators pruned to the beam of the rays through the
+    /// pixel centres `xs × ys` over `t`, each a tree of regions: the beam
+    /// over all of `t`, then (unless the scene is flat) its halves along
+    /// the rays, and so on down to slices about as deep as the beam is
+    /// wide, each pruned from the one it halves. Near the eye and behind
+    /// it a long beam thus becomes short slices, over which a CSG tree of
+    /// many objects keeps only the few that cross each one; the whole
+    /// beam's own tape seldom shrinks much. `None` when nothing prunes.
+    pub(crate) fn pruned_to_beam(
+        &self,
+        xs: (f64, f64),
+        ys: (f64, f64),
+        t: Interval,
+        st: &mut TileState,
+    ) -> Option<PrunedEvals> {
+        if !self.prune || !self.live_ops.iter().any(|&n| n >= PRUNE_MIN_OPS) {
+            return None;
+        }
+        let mut any = false;
+        let mut live = self.live_ops.clone();
+        let mut evals = Vec::with_capacity(self.evals.len());
+        for (k, e) in self.evals.iter().enumerate() {
+            let tree = match &self.tapes[k] {
+                Some(tape) if live[k] >= PRUNE_MIN_OPS && e.as_regional().is_none() => {
+                    let beam = Beam { xs, ys, parent: e };
+                    beam.node(self, tape, t, (e, tape.len()), SLICE_DEPTH, st)
+                }
+                _ => None,
+            };
+            match tree {
+                Some(tree) => {
+                    any = true;
+                    live[k] = tree.pruned_tape().len();
+                    evals.push(Arc::new(tree) as Arc<dyn Evaluator>);
+                }
+                None => evals.push(Arc::clone(e)),
+            }
+        }
+        any.then_some((evals, live))
+    }
+}
+
+/// Levels of halving a tile's beam along its rays (up to 2^SLICE_DEPTH
+/// slices).
+const SLICE_DEPTH: u32 = 6;
+/// A slice is halved while it is deeper than this many times its width.
+const SLICE_ASPECT: f64 = 2.0;
+
+/// How much shorter a pruned tape must be than the one answering now.
+fn gain(answer: &dyn Evaluator) -> usize {
+    if answer.is_native() {
+        PRUNE_GAIN_NATIVE
+    } else {
+        PRUNE_GAIN_INTERPRETED
+    }
+}
+
+// The beam a tree of regions is built over.
+struct Beam<'e> {
+    xs: (f64, f64),
+    ys: (f64, f64),
+    parent: &'e Arc<dyn Evaluator>,
+}
+
+impl Beam<'_> {
+    // The region of the beam over `t`, with `tape` (exact on a region
+    // holding it) pruned to it, and its halves along the rays below it.
+    // `above` is what answers for the region if its own tape is not much
+    // shorter, with the length of its tape.
+    fn node(
+        &self,
+        tr: &Tracer<'_>,
+        tape: &Tape,
+        t: Interval,
+        above: (&Arc<dyn Evaluator>, usize),
+        depth: u32,
+        st: &mut TileState,
+    ) -> Option<Regional> {
+        let region = tr.beam_region(self.xs, self.ys, t)?;
+        let own = tape.prune(region, &mut st.workspace).map(|p| p.tape);
+        let own = own.unwrap_or_else(|| tape.clone());
+        let answers = own.len() * gain(above.0.as_ref()) <= above.1;
+        let parent = Arc::clone(self.parent);
+        let node = if answers {
+            st.stats.pruned_ops_before += above.1 as u64;
+            st.stats.pruned_ops_after += own.len() as u64;
+            Regional::new(region, own, parent)
+        } else {
+            Regional::delegating(region, own, (Arc::clone(above.0), above.1), parent)
+        };
+        let width = {
+            let w = |r: (f64, f64)| (r.1 - r.0 + 1.0) * tr.cam.spacing(t.hi);
+            w(self.xs).max(w(self.ys))
+        };
+        if depth == 0 || tr.flat || t.width() <= SLICE_ASPECT * width {
+            return Some(node);
+        }
+        let below = (Arc::clone(node.answer()), node.answer_len());
+        let m = t.mid();
+        let children = [Interval::new(t.lo, m), Interval::new(m, t.hi)]
+            .into_iter()
+            .filter_map(|half| {
+                let tape = node.pruned_tape();
+                self.node(tr, tape, half, (&below.0, below.1), depth - 1, st)
+            })
+            .collect();
+        Some(node.with_children(children))
     }
 }
 
