@@ -409,7 +409,7 @@ impl Ctx<'_, '_> {
             Some(probe::scene_interval(tr, &self.all, hb, Form::Tight(0), st))
         };
         let rejected = |t: Interval| eval_min(t, st).is_none_or(|f| f.lo > 0.0);
-        let (ta, tb) = match probe::sweep(tr.flat, t0, t1, min_w, rejected) {
+        let (ta, tb) = match probe::sweep(tr.sweep_mode(t0, t1), t0, t1, min_w, rejected) {
             Sweep::Empty => return decide(Cell::Background, t_floor),
             // Constant along the rays: no bracket to include.
             Sweep::Flat => return decide(Cell::Split, t_floor),

@@ -130,7 +130,7 @@ pub(crate) enum Sweep {
 /// `excluded` proves free of surface, front to back (see
 /// [`first_candidate`]); a `flat` scene gets one test over the whole range.
 pub(crate) fn sweep(
-    flat: bool,
+    (flat, pieces): (bool, usize),
     t0: f64,
     t1: f64,
     min_w: impl Fn(f64) -> f64,
@@ -143,13 +143,14 @@ pub(crate) fn sweep(
             Sweep::Flat
         };
     }
-    match first_candidate(t0, t1, min_w, excluded) {
+    match first_candidate(t0, t1, pieces, min_w, excluded) {
         Some((ta, tb)) => Sweep::Candidate(ta, tb),
         None => Sweep::Empty,
     }
 }
 
-/// The front-to-back rejection sweep over `[t0, t1]`: bisects nearest
+/// The front-to-back rejection sweep over `[t0, t1]`, cut first into
+/// `pieces` equal pieces (see `Tracer::first_pieces`): bisects nearest
 /// half first, drops every piece `excluded` proves free of surface, and
 /// returns the first piece it cannot drop once that piece is narrower than
 /// `min_w(start)` (or after [`MAX_SWEEP_PIECES`] pieces); `None` when the
@@ -157,10 +158,11 @@ pub(crate) fn sweep(
 fn first_candidate(
     t0: f64,
     t1: f64,
+    pieces: usize,
     min_w: impl Fn(f64) -> f64,
     mut excluded: impl FnMut(Interval) -> bool,
 ) -> Option<(f64, f64)> {
-    let mut stack = vec![(t0, t1)];
+    let mut stack = equal_pieces(t0, t1, pieces);
     let mut pieces = 0usize;
     while let Some((a, c)) = stack.pop() {
         pieces += 1;
@@ -175,6 +177,20 @@ fn first_candidate(
         stack.push((a, m));
     }
     None
+}
+
+/// `[t0, t1]` cut into `n` equal pieces, as a stack: the nearest piece
+/// last, so that it is popped first.
+pub(crate) fn equal_pieces(t0: f64, t1: f64, n: usize) -> Vec<(f64, f64)> {
+    let n = n.max(1);
+    let at = |i: usize| {
+        if i == n {
+            t1
+        } else {
+            t0 + (t1 - t0) * (i as f64 / n as f64)
+        }
+    };
+    (0..n).rev().map(|i| (at(i), at(i + 1))).collect()
 }
 
 /// The far end of an inclusion bracket behind the candidate piece
@@ -236,12 +252,18 @@ mod tests {
 
     #[test]
     fn the_sweep_finds_the_first_piece_with_surface() {
-        let s = sweep(false, 0.0, 8.0, |_| 0.5, |t| t.hi < 3.0 || t.lo > 3.5);
-        let Sweep::Candidate(a, b) = s else {
-            panic!("{s:?}")
-        };
-        assert!(a <= 3.0 && b >= 3.0 && b - a <= 0.5, "{a} {b}");
-        assert_eq!(sweep(false, 0.0, 8.0, |_| 0.5, |_| true), Sweep::Empty);
-        assert_eq!(sweep(true, 0.0, 8.0, |_| 0.5, |_| false), Sweep::Flat);
+        for pieces in [1, 4, 5] {
+            let s = sweep((false, pieces), 0.0, 8.0, |_| 0.5, |t| t.hi < 3.0 || t.lo > 3.5);
+            let Sweep::Candidate(a, b) = s else {
+                panic!("{s:?}")
+            };
+            assert!(a <= 3.0 && b >= 3.0 && b - a <= 0.5, "{a} {b}");
+            let s = sweep((false, pieces), 0.0, 8.0, |_| 0.5, |_| true);
+            assert_eq!(s, Sweep::Empty);
+        }
+        assert_eq!(sweep((true, 1), 0.0, 8.0, |_| 0.5, |_| false), Sweep::Flat);
+        let p = equal_pieces(1.0, 2.0, 4);
+        assert_eq!(p.last(), Some(&(1.0, 1.25)));
+        assert_eq!(p[0], (1.75, 2.0));
     }
 }

@@ -179,7 +179,7 @@ pub(crate) fn trace_ray(
     if let Some(h) = starts_inside(tr, ray, live, t0, st) {
         return Some(h);
     }
-    let mut stack: Vec<(f64, f64)> = vec![(t0, t1)];
+    let mut stack = super::probe::equal_pieces(t0, t1, tr.first_pieces(t0, t1));
     let mut cand: Vec<(u32, Interval)> = Vec::with_capacity(live.len());
     let mut steps = 0usize;
     while let Some((a, b)) = stack.pop() {

@@ -172,6 +172,30 @@ impl<'a> Tracer<'a> {
         }
     }
 
+    /// How many equal pieces a sweep along rays over `[t0, t1]` starts
+    /// from: with pruned tapes, pieces as deep as the slices of a tile's
+    /// tree of regions (see [`Tracer::pruned_to_beam`]), so that even the
+    /// first evaluations run a slice's short tape rather than the whole
+    /// function; else one. A function of the range, camera and scene
+    /// alone, so that every method cuts a ray the same way.
+    pub(crate) fn first_pieces(&self, t0: f64, t1: f64) -> usize {
+        if self.flat || !self.tapes.iter().any(Option::is_some) {
+            return 1;
+        }
+        let slice = SLICE_ASPECT * f64::from(super::TILE) * self.cam.spacing(t1);
+        let n = ((t1 - t0) / slice).ceil();
+        if n.is_nan() || n <= 1.0 {
+            return 1;
+        }
+        (n.min(f64::from(1u32 << SLICE_DEPTH)) as usize).next_power_of_two()
+    }
+
+    /// Whether the scene is flat, and [`Tracer::first_pieces`], for
+    /// `probe::sweep`.
+    pub(crate) fn sweep_mode(&self, t0: f64, t1: f64) -> (bool, usize) {
+        (self.flat, self.first_pieces(t0, t1))
+    }
+
     /// Object `k` over `b`.
     pub(crate) fn interval(&self, k: usize, b: IBox, st: &mut RenderStats) -> Interval {
         st.interval_evals += 1;
