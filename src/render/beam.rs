@@ -32,7 +32,7 @@ use super::stats::RenderStats;
 use super::tracer::{TileState, Tracer};
 use super::{Class, Hit};
 use crate::interval::Interval;
-use crate::interval::boxes::{IBox, box_hull, dot, ray_box};
+use crate::interval::boxes::{IBox, box_hull, dot};
 
 /// The per-pixel data of one tile.
 pub(crate) struct TileRays {
@@ -46,6 +46,10 @@ pub(crate) struct TileRays {
     pub rays: Vec<PixelRay>,
     /// Per-pixel slab ranges (None: the ray misses the bounds).
     pub slabs: Vec<Option<(f64, f64)>>,
+    /// Per-pixel box around the ray's point at its clip start (None: the
+    /// ray misses the bounds); computed once, as every block level reads
+    /// them.
+    pub starts: Vec<Option<IBox>>,
     /// Per-pixel results.
     pub hits: Vec<Option<Hit>>,
     /// How each pixel was decided.
@@ -146,11 +150,9 @@ fn beam_tests(
         }
         Sweep::Flat => {
             st.stats.blocks_undecided += 1;
-            // The tile already pruned to its beam over the whole depth; a
-            // flat block's sub-blocks gain little from pruning again, and
-            // it costs an interval pass and a rebuild per block (prospero
-            // at 1024² measured no faster with it).
-            split(tr, tile, b, t0, live, st);
+            // Pruning nests: each quarter prunes the tape its parent
+            // block pruned, one interval pass over a short tape.
+            split_pruned(tr, tile, b, (xs, ys, Interval::new(t0, t1)), t0, live, st);
             return;
         }
         Sweep::Candidate(ta, tb) => (ta, tb),
@@ -263,12 +265,11 @@ fn all_start_inside(
     st: &mut RenderStats,
 ) -> bool {
     let mut hull: Option<IBox> = None;
-    for (i, j) in b.pixels() {
-        let k = tile.idx(i, j);
-        if let Some((pt0, _)) = tile.slabs[k] {
-            let r = &tile.rays[k];
-            let p = ray_box(r.o, r.d, Interval::point(pt0));
-            hull = Some(hull.map_or(p, |h| box_hull(h, p)));
+    for j in b.y0..b.y1 {
+        for k in tile.idx(b.x0, j)..tile.idx(b.x1, j) {
+            if let Some(p) = tile.starts[k] {
+                hull = Some(hull.map_or(p, |h| box_hull(h, p)));
+            }
         }
     }
     let Some(hull) = hull else {

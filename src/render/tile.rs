@@ -11,6 +11,7 @@ use super::shade::{self, Surf};
 use super::tracer::{PrunedEvals, TileState, Tracer};
 use super::{Class, Method, RenderOptions, output, ray};
 use crate::interval::Interval;
+use crate::interval::boxes::ray_box;
 
 /// Which pixels of the traced image a tile covers.
 #[derive(Copy, Clone, Debug)]
@@ -141,7 +142,13 @@ fn tile_rays(tr: &Tracer<'_>, spec: &TileSpec<'_>) -> TileRays {
             rays.push(r);
         }
     }
+    let starts = rays
+        .iter()
+        .zip(&slabs)
+        .map(|(r, s)| s.map(|(t0, _)| ray_box(r.o, r.d, Interval::point(t0))))
+        .collect();
     TileRays {
+        starts,
         x0: spec.x0,
         y0: spec.y0,
         w: spec.w,
