@@ -76,7 +76,7 @@ fn too_large(name: &str, size: Option<u64>, limit: u64) -> LoadError {
 /// `n` bytes in the largest binary unit that divides it, for messages.
 fn human_bytes(n: u64) -> String {
     for (shift, unit) in [(30, "GiB"), (20, "MiB"), (10, "KiB")] {
-        if n >= 1 << shift && n % (1 << shift) == 0 {
+        if n >= 1 << shift && n.is_multiple_of(1 << shift) {
             return format!("{} {unit}", n >> shift);
         }
     }
