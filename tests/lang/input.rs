@@ -46,7 +46,7 @@ fn non_utf8_vm_model_is_the_same_error() {
 }
 
 #[test]
-fn first_bad_byte_wins_and_bom_free_utf8_loads() {
+fn first_bad_byte_wins_and_valid_utf8_loads() {
     // Only the first of several bad bytes is reported.
     let e = err_of_bytes(b"object o = x; \xfe \xff");
     assert!(e.message.contains("0xFE at byte offset 14"), "{e}");
