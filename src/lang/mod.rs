@@ -7,6 +7,7 @@
 pub mod ast;
 pub mod builtins;
 pub mod diag;
+pub mod input;
 pub mod lexer;
 pub mod lower;
 pub mod parser;
@@ -17,6 +18,7 @@ use crate::ir::Function;
 use crate::lang::lower::Program;
 use crate::scene::Scene;
 use diag::Sources;
+pub use input::{MAX_SOURCE_BYTES, read_source};
 use std::fmt;
 use std::path::Path;
 
@@ -55,12 +57,11 @@ impl fmt::Display for LoadError {
 impl std::error::Error for LoadError {}
 
 /// Reads and lowers a scene file: `*.vm` is read as Fidget's SSA format,
-/// anything else as an ibeam scene.
+/// anything else as an ibeam scene. Files over [`MAX_SOURCE_BYTES`] or
+/// not UTF-8 are refused (see [`read_source`]).
 pub fn load_scene(path: &Path) -> Result<Scene, LoadError> {
-    let name = path.display().to_string();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| diag::error_without_position(&name, format!("cannot read `{name}`: {e}")))?;
-    load_scene_source(&name, &text)
+    let text = read_source(path)?;
+    load_scene_source(&path.display().to_string(), &text)
 }
 
 /// Lowers scene text; `file_name` picks the format by its extension (as

@@ -252,3 +252,40 @@ fn object_undefined_everywhere_is_an_error() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn non_utf8_scene_names_the_byte_offset_and_position() {
+    let dir = scratch("utf8");
+    let scene = dir.join("latin1.ib");
+    // 0xB0 is Latin-1 '°': byte offset 25, line 2, column 13.
+    std::fs::write(&scene, b"// a comment\nlet a = 90; \xb0\n").unwrap();
+    let o = render(&scene, &dir.join("x.png"), &["--size", "8x8"]);
+    let loc = format!("{}:2:13: error: file is not valid UTF-8", scene.display());
+    assert_fails(&o, &[&loc, "invalid byte 0xB0 at byte offset 25", "^"]);
+    assert!(!dir.join("x.png").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// An endless device reports no length; the read stops past the limit, so
+/// this is quick and bounded in memory instead of hanging.
+#[cfg(unix)]
+#[test]
+fn endless_input_is_refused_by_size() {
+    let dir = scratch("zero");
+    let t = std::time::Instant::now();
+    let o = render(
+        Path::new("/dev/zero"),
+        &dir.join("x.png"),
+        &["--size", "8x8"],
+    );
+    assert_fails(
+        &o,
+        &[
+            "/dev/zero: error: `/dev/zero` is too large",
+            "limited to 268435456 bytes (256 MiB)",
+        ],
+    );
+    assert!(t.elapsed().as_secs() < 20, "took {:?}", t.elapsed());
+    assert!(!dir.join("x.png").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,12 +1,13 @@
 //! The scene language end to end: parsing of every construct through
 //! `load_scene_source`, point values of the lowered functions, every example
 //! file, every diagnostic (message and position), `.vm` import, and the
-//! limits on deep and long inputs. One test binary; the topics are its
-//! modules.
+//! limits on deep and long inputs, reading files (UTF-8, size limit). One
+//! test binary; the topics are its modules.
 
 mod errors;
 mod expressions;
 mod files;
+mod input;
 mod limits;
 
 use ibeam::eval::Evaluator;
