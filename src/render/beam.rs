@@ -142,7 +142,9 @@ fn beam_tests(
     let eval_min = |t: Interval, st: &mut TileState| {
         probe::scene_interval(tr, live, corners.hull(t), form, st)
     };
-    let (ta, tb) = match probe::sweep(tr.sweep_mode(t0, t1), t0, t1, min_w, |t| eval_min(t, st).lo > 0.0) {
+    let (ta, tb) = match probe::sweep(tr.sweep_mode(t0, t1), t0, t1, min_w, |t| {
+        eval_min(t, st).lo > 0.0
+    }) {
         Sweep::Empty => {
             st.stats.blocks_rejected += 1;
             set_block(tile, b, Class::Background);

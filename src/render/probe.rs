@@ -253,7 +253,13 @@ mod tests {
     #[test]
     fn the_sweep_finds_the_first_piece_with_surface() {
         for pieces in [1, 4, 5] {
-            let s = sweep((false, pieces), 0.0, 8.0, |_| 0.5, |t| t.hi < 3.0 || t.lo > 3.5);
+            let s = sweep(
+                (false, pieces),
+                0.0,
+                8.0,
+                |_| 0.5,
+                |t| t.hi < 3.0 || t.lo > 3.5,
+            );
             let Sweep::Candidate(a, b) = s else {
                 panic!("{s:?}")
             };

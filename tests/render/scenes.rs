@@ -125,11 +125,31 @@ fn bad_inputs_are_errors() {
     ));
 }
 
-/// Per-tile pruning (`ir::prune`) changes how large functions are
-/// evaluated, not what is drawn: a 2D model of 36 discs (a CSG union of
-/// about 200 ops, seen along z), the prospero model (2D) and the
-/// colonnade model (3D) render the same hit mask and the same hit depths
-/// with and without it, and pruning did happen.
+/// A union of `n` spheres of radius 0.06 at pseudo-random places in the
+/// unit cube, seen from a corner in perspective.
+fn spheres_scene(n: usize) -> String {
+    let mut rng = ibeam::ir::random::Rng::new(5);
+    let balls: Vec<String> = (0..n)
+        .map(|_| {
+            let [x, y, z] = [(); 3].map(|_| rng.range(-0.9, 0.9));
+            format!("translate(sphere(0.06), {x}, {y}, {z})")
+        })
+        .collect();
+    format!(
+        "object s = union({});\n\
+         camera {{ eye = (2.2, 1.6, 2.8); target = (0, 0, 0); }}\n\
+         bounds = (-1, -1, -1) .. (1, 1, 1);\n",
+        balls.join(", ")
+    )
+}
+
+/// Pruning (`eval::tape`, `eval::regional`) changes how large functions
+/// are evaluated, not what is drawn: a 2D model of 36 discs (a CSG union
+/// of about 200 ops, seen along z), a 3D union of 80 spheres seen in
+/// perspective (pruned per slice of each tile's beam and per block), the
+/// prospero model (2D) and the colonnade model (3D) render the same hit
+/// mask and the same hit depths with and without it, and pruning did
+/// happen; the pixel method draws the same hit mask.
 #[test]
 fn pruning_draws_what_the_whole_function_draws() {
     let mut text = String::from("object s = ");
@@ -151,26 +171,33 @@ fn pruning_draws_what_the_whole_function_draws() {
         ";\ncamera { eye = (0, 0, 5); target = (0, 0, 0); ortho = 3; }\n\
          bounds = (-1.5, -1.5, -1) .. (1.5, 1.5, 1);\n",
     );
-    let mut scenes = vec![ibeam::lang::load_scene_source("discs.ib", &text).unwrap()];
+    let mut scenes = vec![
+        (
+            ibeam::lang::load_scene_source("discs.ib", &text).unwrap(),
+            384,
+        ),
+        (
+            ibeam::lang::load_scene_source("spheres.ib", &spheres_scene(80)).unwrap(),
+            160,
+        ),
+    ];
     // The community models, when ../shared is beside the checkout: prospero
     // (2D) and colonnade (3D, pruned per block near the surface).
     for model in ["prospero", "colonnade"] {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join(format!("../shared/models/{model}.vm"));
         if let Ok(s) = ibeam::lang::load_scene(&path) {
-            scenes.push(s);
+            scenes.push((s, if model == "prospero" { 384 } else { 128 }));
         }
     }
-    for sc in &scenes {
+    for (sc, size) in &scenes {
         let evals = ibeam::eval::build_evaluators(sc, ibeam::eval::EvalKind::Jit).unwrap();
         assert!(evals[0].function().unwrap().live_count() >= 64);
-        let size = if scenes.len() > 2 && std::ptr::eq(sc, &scenes[2]) {
-            128
-        } else {
-            384
-        };
-        let mut o = opts(size, size, Method::Beam);
+        let mut o = opts(*size, *size, Method::Beam);
         let pruned = run(sc, evals.clone(), &o);
+        let mut p = o.clone();
+        p.method = Method::Pixel;
+        assert_eq!(run(sc, evals.clone(), &p).hit_mask, pruned.hit_mask);
         o.prune = false;
         let whole = run(sc, evals, &o);
         assert!(pruned.stats.pruned_ops_after > 0, "nothing was pruned");
