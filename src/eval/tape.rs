@@ -78,6 +78,11 @@ pub struct Tape {
 pub struct Workspace {
     points: Vec<f64>,
     intervals: Vec<Interval>,
+    // Per-op scratch of `Tape::prune`.
+    values: Vec<Interval>,
+    facts: Vec<Facts>,
+    alias: Vec<usize>,
+    live: Vec<bool>,
 }
 
 /// The result of [`Tape::prune`].
@@ -222,14 +227,33 @@ impl Tape {
     /// The tape restricted to the box `b`: `None` when no `min`/`max` is
     /// decided there (see the module doc and [`crate::ir::prune`]).
     pub fn prune(&self, b: [Interval; 3], ws: &mut Workspace) -> Option<PrunedTape> {
+        self.prune_to_at_most(b, usize::MAX, ws)
+    }
+
+    /// [`Tape::prune`], but `None` as well when the child would keep more
+    /// than `max_len` ops (counted before it is written, which is most of
+    /// the cost of a pruning that does not pay).
+    pub fn prune_to_at_most(
+        &self,
+        b: [Interval; 3],
+        max_len: usize,
+        ws: &mut Workspace,
+    ) -> Option<PrunedTape> {
         let ops = &self.ssa.ops;
+        let n = ops.len();
         let regs = &mut ws.intervals;
         regs.clear();
         regs.resize(self.registers, Interval::point(0.0));
-        let mut value = vec![Interval::point(0.0); ops.len()];
-        let mut fact = vec![Facts::default(); ops.len()];
+        let value = &mut ws.values;
+        value.clear();
+        value.resize(n, Interval::point(0.0));
+        let fact = &mut ws.facts;
+        fact.clear();
+        fact.resize(n, Facts::default());
         // alias[k]: the op whose value op k always equals on the box.
-        let mut alias: Vec<usize> = (0..ops.len()).collect();
+        let alias = &mut ws.alias;
+        alias.clear();
+        alias.extend(0..n);
         let mut decided = 0;
         for (k, (op, instr)) in ops.iter().zip(&self.code).enumerate() {
             let v = match *instr {
@@ -253,9 +277,26 @@ impl Tape {
         if decided == 0 {
             return None;
         }
-        let keep: Vec<bool> = (0..ops.len()).map(|k| alias[k] == k).collect();
+        // Ops the child keeps: those the root reads through the aliases.
+        let live = &mut ws.live;
+        live.clear();
+        live.resize(n, false);
+        live[alias[self.ssa.root.index()]] = true;
+        let mut kept = 0;
+        for k in (0..n).rev() {
+            if live[k] && alias[k] == k {
+                kept += 1;
+                for a in ops[k].operands() {
+                    live[alias[a.index()]] = true;
+                }
+            }
+        }
+        if kept > max_len {
+            return None;
+        }
+        let keep: Vec<bool> = (0..n).map(|k| alias[k] == k).collect();
         Some(PrunedTape {
-            tape: Tape::write_child(&self.ssa, &alias, &keep),
+            tape: Tape::write_child(&self.ssa, alias, &keep),
             decided,
         })
     }
@@ -486,6 +527,22 @@ mod tests {
                 assert!(same(*v, it.point(*p)), "at {p:?}");
             }
         }
+    }
+
+    #[test]
+    fn a_size_limit_refuses_a_longer_child_and_keeps_a_shorter_one() {
+        let whole = Tape::new(&spheres(50));
+        let mut ws = Workspace::default();
+        let b = [
+            Interval::new(20.2, 22.8),
+            Interval::new(-1.0, 1.0),
+            Interval::new(-1.0, 1.0),
+        ];
+        let child = whole.prune(b, &mut ws).expect("prunes").tape;
+        let n = child.len();
+        assert!(whole.prune_to_at_most(b, n - 1, &mut ws).is_none());
+        let same = whole.prune_to_at_most(b, n, &mut ws).expect("fits");
+        assert_eq!(same.tape, child);
     }
 
     #[test]

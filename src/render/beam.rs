@@ -32,7 +32,7 @@ use super::stats::RenderStats;
 use super::tracer::{TileState, Tracer};
 use super::{Class, Hit};
 use crate::interval::Interval;
-use crate::interval::boxes::{IBox, box_hull, dot};
+use crate::interval::boxes::{IBox, box_hull, dot, ray_box};
 
 /// The per-pixel data of one tile.
 pub(crate) struct TileRays {
@@ -47,8 +47,8 @@ pub(crate) struct TileRays {
     /// Per-pixel slab ranges (None: the ray misses the bounds).
     pub slabs: Vec<Option<(f64, f64)>>,
     /// Per-pixel box around the ray's point at its clip start (None: the
-    /// ray misses the bounds); computed once, as every block level reads
-    /// them.
+    /// ray misses the bounds); empty until a block first needs them, then
+    /// computed for the whole tile once, as every block level reads them.
     pub starts: Vec<Option<IBox>>,
     /// Per-pixel results.
     pub hits: Vec<Option<Hit>>,
@@ -110,7 +110,7 @@ fn block(
         // the first-root policy, are then those of `Method::Pixel`, and
         // both methods draw the same pixels. Re-rejecting the prefix costs
         // a few interval evaluations.
-        tile.hits[k] = trace_ray(tr, &ray, pt0, pt1, live, &mut st.stats);
+        tile.hits[k] = trace_ray(tr, &ray, pt0, pt1, live, st);
         tile.class[k] = Class::Ray;
         return;
     }
@@ -165,7 +165,18 @@ fn beam_tests(
         && decreasing(tr, &corners, Interval::new(ta, tb2), live, &mut st.stats)
     {
         st.stats.blocks_included += 1;
-        include_block(tr, tile, b, ta, tb2, live, &mut st.stats);
+        // Every pixel refines its root inside the bracket's beam: prune
+        // there (a few pixels wide and a bracket deep).
+        let bracket = tr
+            .beam_region(xs, ys, Interval::new(ta, tb2))
+            .and_then(|region| tr.pruned_to(region, st));
+        match bracket {
+            Some((evals, live_ops)) => {
+                let local = tr.with_evals(&evals, live_ops);
+                include_block(&local, tile, b, ta, tb2, live, st);
+            }
+            None => include_block(tr, tile, b, ta, tb2, live, st),
+        }
         return;
     }
     st.stats.blocks_undecided += 1;
@@ -266,6 +277,11 @@ fn all_start_inside(
     live: &[u32],
     st: &mut RenderStats,
 ) -> bool {
+    if tile.starts.is_empty() {
+        tile.starts = (tile.rays.iter().zip(&tile.slabs))
+            .map(|(r, s)| s.map(|(t0, _)| ray_box(r.o, r.d, Interval::point(t0))))
+            .collect();
+    }
     let mut hull: Option<IBox> = None;
     for j in b.y0..b.y1 {
         for k in tile.idx(b.x0, j)..tile.idx(b.x1, j) {
@@ -329,7 +345,7 @@ fn include_block(
     ta: f64,
     tb: f64,
     live: &[u32],
-    st: &mut RenderStats,
+    st: &mut TileState,
 ) {
     for (i, j) in b.pixels() {
         let k = tile.idx(i, j);
@@ -339,13 +355,13 @@ fn include_block(
             tile.hits[k] = None;
             continue;
         };
-        st.pixels_refined += 1;
+        st.stats.pixels_refined += 1;
         // The bracket is clipped to the pixel's own range first: a root
         // just past the pixel's clip end (within the refinement
         // tolerance) would otherwise be refined to a point inside it.
         let (ca, cb) = (ta.max(pt0), tb.min(pt1));
         let hit = if ca < cb {
-            refine(tr, &ray, live, ca, cb, st)
+            refine(tr, &ray, live, ca, cb, &mut st.stats)
         } else {
             None
         };

@@ -27,7 +27,7 @@
 
 use super::Hit;
 use super::camera::PixelRay;
-use super::tracer::Tracer;
+use super::tracer::{TileState, Tracer};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, ray_box};
 use crate::render::stats::RenderStats;
@@ -170,25 +170,62 @@ pub(crate) fn trace_ray(
     t0: f64,
     t1: f64,
     live: &[u32],
-    st: &mut RenderStats,
+    st: &mut TileState,
 ) -> Option<Hit> {
-    st.rays += 1;
+    st.stats.rays += 1;
     if live.is_empty() {
         return None;
     }
-    if let Some(h) = starts_inside(tr, ray, live, t0, st) {
+    if let Some(h) = starts_inside(tr, ray, live, t0, &mut st.stats) {
         return Some(h);
     }
-    let mut stack = super::probe::equal_pieces(t0, t1, tr.first_pieces(t0, t1));
-    let mut cand: Vec<(u32, Interval)> = Vec::with_capacity(live.len());
+    let pieces = super::probe::equal_pieces(t0, t1, tr.first_pieces(t0, t1));
     let mut steps = 0usize;
+    sweep_ray(tr, ray, pieces, live, (&mut steps, f64::INFINITY), st)
+}
+
+/// A piece this many times narrower than the one its functions were last
+/// pruned to prunes them again (to the piece's box) for its sub-pieces.
+const RAY_PRUNE_RATIO: f64 = 4.0;
+
+// The front-to-back bisection of `trace_ray` over the pieces on `stack`
+// (nearest last). `steps` counts pieces across nested calls; `scope` is
+// the width of the piece `tr`'s functions were last pruned to (infinite
+// at first). Where pruning is on, a piece `RAY_PRUNE_RATIO` times
+// narrower than `scope` is swept, with its sub-pieces, by a nested call
+// with the functions pruned to it (when that shrinks them): a ray's pieces soon shrink to a few pixels across, over which a
+// union of many objects keeps one or two, while the tile's slices keep
+// every object that meets them. Pruning is exact, so the nesting changes
+// the cost of the evaluations and the tightness of their intervals, not
+// the order in which pieces are visited.
+fn sweep_ray(
+    tr: &Tracer<'_>,
+    ray: &PixelRay,
+    mut stack: Vec<(f64, f64)>,
+    live: &[u32],
+    (steps, scope): (&mut usize, f64),
+    st: &mut TileState,
+) -> Option<Hit> {
+    let mut cand: Vec<(u32, Interval)> = Vec::with_capacity(live.len());
     while let Some((a, b)) = stack.pop() {
-        steps += 1;
+        if tr.prune && (b - a) * RAY_PRUNE_RATIO <= scope {
+            if let Some((evals, live_ops)) = tr.pruned_to_ray(ray, Interval::new(a, b), st) {
+                let local = tr.with_evals(&evals, live_ops);
+                let piece = vec![(a, b)];
+                if let Some(h) = sweep_ray(&local, ray, piece, live, (steps, b - a), st) {
+                    return Some(h);
+                }
+                continue;
+            }
+        }
+        *steps += 1;
         let bx = ray_box(ray.o, ray.d, Interval::new(a, b));
         cand.clear();
         for &k in live {
-            let f = tr.interval(k as usize, bx, st);
-            if !f.is_empty() && f.lo <= 0.0 && !centred_positive(tr, ray, k as usize, bx, a, b, st)
+            let f = tr.interval(k as usize, bx, &mut st.stats);
+            if !f.is_empty()
+                && f.lo <= 0.0
+                && !centred_positive(tr, ray, k as usize, bx, a, b, &mut st.stats)
             {
                 cand.push((k, f));
             }
@@ -196,44 +233,44 @@ pub(crate) fn trace_ray(
         if cand.is_empty() {
             continue;
         }
+        let stt = &mut st.stats;
         let tol = tr.cam.tolerance(a);
-        if steps >= MAX_RAY_STEPS {
-            return Some(narrow_hit(tr, ray, live, a, b, st));
+        if *steps >= MAX_RAY_STEPS {
+            return Some(narrow_hit(tr, ray, live, a, b, stt));
         }
         // A narrow piece is a hit when its ends show a sign change (the
         // root is refined); without one it is a tangency candidate, bisected
         // on down to TANGENT_SPLIT times narrower before the tangency
         // policy draws it (see the module doc).
-        if b - a <= tol && (b - a <= tol / TANGENT_SPLIT || sign_change(tr, ray, live, a, b, st)) {
-            return Some(narrow_hit(tr, ray, live, a, b, st));
+        if b - a <= tol && (b - a <= tol / TANGENT_SPLIT || sign_change(tr, ray, live, a, b, stt)) {
+            return Some(narrow_hit(tr, ray, live, a, b, stt));
         }
+        // The sub-pieces to sweep next, nearest last.
+        let mut sub = Vec::with_capacity(2);
+        let halves = |na: f64, nb: f64, sub: &mut Vec<(f64, f64)>| {
+            let m = 0.5 * (na + nb);
+            sub.push((m, nb));
+            sub.push((na, m));
+        };
         if cand.len() == 1 {
             let k = cand[0].0 as usize;
-            match newton(tr, ray, k, a, b, st) {
+            match newton(tr, ray, k, a, b, stt) {
                 Newton::Empty => continue,
                 Newton::Unique(na, nb) => {
-                    if let Some(h) = refine(tr, ray, live, na, nb, st) {
+                    if let Some(h) = refine(tr, ray, live, na, nb, stt) {
                         return Some(h);
                     }
                     // Point signs disagree with the proof at the limits of
                     // precision: treat as a narrow piece.
-                    return Some(narrow_hit(tr, ray, live, na, nb, st));
+                    return Some(narrow_hit(tr, ray, live, na, nb, stt));
                 }
-                Newton::Shrunk(na, nb) if nb - na < 0.5 * (b - a) => {
-                    stack.push((na, nb));
-                    continue;
-                }
-                Newton::Shrunk(na, nb) => {
-                    let m = 0.5 * (na + nb);
-                    stack.push((m, nb));
-                    stack.push((na, m));
-                    continue;
-                }
+                Newton::Shrunk(na, nb) if nb - na < 0.5 * (b - a) => sub.push((na, nb)),
+                Newton::Shrunk(na, nb) => halves(na, nb, &mut sub),
             }
+        } else {
+            halves(a, b, &mut sub);
         }
-        let m = 0.5 * (a + b);
-        stack.push((m, b));
-        stack.push((a, m));
+        stack.extend(sub);
     }
     None
 }
@@ -457,9 +494,9 @@ mod tests {
             om: o,
             dm: d,
         };
-        let mut st = RenderStats::default();
+        let mut st = TileState::default();
         let hit = trace_ray(&tr, &ray, 0.0, 4.0, &[0], &mut st);
-        (hit, st, tr.cam.tolerance(2.5))
+        (hit, st.stats, tr.cam.tolerance(2.5))
     }
 
     fn h(v: f64) -> Interval {

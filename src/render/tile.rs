@@ -11,7 +11,6 @@ use super::shade::{self, Surf};
 use super::tracer::{PrunedEvals, TileState, Tracer};
 use super::{Class, Method, RenderOptions, output, ray};
 use crate::interval::Interval;
-use crate::interval::boxes::ray_box;
 
 /// Which pixels of the traced image a tile covers.
 #[derive(Copy, Clone, Debug)]
@@ -142,13 +141,8 @@ fn tile_rays(tr: &Tracer<'_>, spec: &TileSpec<'_>) -> TileRays {
             rays.push(r);
         }
     }
-    let starts = rays
-        .iter()
-        .zip(&slabs)
-        .map(|(r, s)| s.map(|(t0, _)| ray_box(r.o, r.d, Interval::point(t0))))
-        .collect();
     TileRays {
-        starts,
+        starts: Vec::new(),
         x0: spec.x0,
         y0: spec.y0,
         w: spec.w,
@@ -188,12 +182,13 @@ fn visibility(tr: &Tracer<'_>, method: Method, tile: &mut TileRays, th: u32, st:
         Method::Beam => beam::trace_tile(tr, tile, th, st),
         Method::Pixel | Method::Point { .. } => {
             let all: Vec<u32> = (0..tr.evals.len() as u32).collect();
-            let st = &mut st.stats;
             for k in 0..n {
                 if let Some((a, b)) = tile.slabs[k] {
                     let r = tile.rays[k];
                     tile.hits[k] = match method {
-                        Method::Point { steps } => ray::march(tr, &r, a, b, &all, steps, st),
+                        Method::Point { steps } => {
+                            ray::march(tr, &r, a, b, &all, steps, &mut st.stats)
+                        }
                         _ => ray::trace_ray(tr, &r, a, b, &all, st),
                     };
                     tile.class[k] = Class::Ray;

@@ -26,6 +26,10 @@ const MV_WIN_RATIO: u64 = 32;
 
 /// Functions with fewer live ops than this are not pruned.
 const PRUNE_MIN_OPS: usize = 64;
+/// ... and not along single rays below this many: a ray prunes at every
+/// fourfold narrowing of its pieces, and a short tape does not repay
+/// that.
+const RAY_PRUNE_MIN_OPS: usize = 256;
 /// A pruned function replaces a native one only if it is at least this
 /// many times shorter: it runs in the interpreter, which costs about 3-7x
 /// the JIT per op (`ibeam bench eval`).
@@ -283,23 +287,25 @@ impl<'a> Tracer<'a> {
         self.evals[k].point_grad(p)
     }
 
+    /// The scene's evaluators pruned to the box of `ray` over `t` (see
+    /// [`Tracer::pruned_to`]), for the sub-pieces of a piece of a ray.
+    pub(crate) fn pruned_to_ray(
+        &self,
+        ray: &super::camera::PixelRay,
+        t: Interval,
+        st: &mut TileState,
+    ) -> Option<PrunedEvals> {
+        let region = padded(crate::interval::boxes::ray_box(ray.o, ray.d, t))?;
+        self.pruned_to_from(region, RAY_PRUNE_MIN_OPS, st)
+    }
+
     /// The region the evaluations for the rays through the pixel centres
     /// `xs × ys` over `t` happen in: their beam's hull (not clipped to the
     /// bounds, which the tracer's own boxes overhang by rounding), widened
     /// by a relative [`REGION_PAD`]. An evaluation that still falls outside
     /// uses the whole function (see `crate::eval::regional`).
     pub(crate) fn beam_region(&self, xs: (f64, f64), ys: (f64, f64), t: Interval) -> Option<IBox> {
-        let region = self.cam.corners(xs, ys).hull(t);
-        if region
-            .iter()
-            .any(|c| c.is_empty() || !c.lo.is_finite() || !c.hi.is_finite())
-        {
-            return None;
-        }
-        Some(region.map(|c| {
-            let pad = REGION_PAD * (c.width() + c.lo.abs().max(c.hi.abs())) + f64::MIN_POSITIVE;
-            Interval::new(c.lo - pad, c.hi + pad)
-        }))
+        padded(self.cam.corners(xs, ys).hull(t))
     }
 
     /// The scene's evaluators with every function that shrinks enough
@@ -308,15 +314,30 @@ impl<'a> Tracer<'a> {
     /// evaluator up its chain of parents whose region holds `region` (the
     /// whole function at the top), which also answers outside `region`.
     pub(crate) fn pruned_to(&self, region: IBox, st: &mut TileState) -> Option<PrunedEvals> {
-        if !self.prune || !self.live_ops.iter().any(|&n| n >= PRUNE_MIN_OPS) {
+        self.pruned_to_from(region, PRUNE_MIN_OPS, st)
+    }
+
+    /// [`Tracer::pruned_to`], pruning only tapes of at least `min_ops`.
+    fn pruned_to_from(
+        &self,
+        region: IBox,
+        min_ops: usize,
+        st: &mut TileState,
+    ) -> Option<PrunedEvals> {
+        // Whether to prune depends on the tape that answers for `region`,
+        // not on this evaluator's own: a short tape of a block answers only
+        // inside the block, and a box beside it meets the tile's longer
+        // ones.
+        if !self.prune || self.tapes.iter().all(Option::is_none) {
             return None;
         }
         let mut any = false;
         let mut live = self.live_ops.clone();
         let mut evals = Vec::with_capacity(self.evals.len());
         for (k, e) in self.evals.iter().enumerate() {
-            let pruned = (live[k] >= PRUNE_MIN_OPS)
-                .then(|| self.prune_one(k, e, region, st))
+            let pruned = self.tapes[k]
+                .is_some()
+                .then(|| self.prune_one(k, e, region, min_ops, st))
                 .flatten();
             match pruned {
                 Some((p, n)) => {
@@ -338,6 +359,7 @@ impl<'a> Tracer<'a> {
         k: usize,
         e: &Arc<dyn Evaluator>,
         region: IBox,
+        min_ops: usize,
         st: &mut TileState,
     ) -> Option<(Arc<dyn Evaluator>, usize)> {
         let mut source = e;
@@ -357,11 +379,14 @@ impl<'a> Tracer<'a> {
                 (tape, source, tape.len())
             }
         };
-        let p = tape.prune(region, &mut st.workspace)?;
-        let after = p.tape.len();
-        if after * gain(answer.as_ref()) > before {
+        // Along rays, only interpreted tapes are pruned: native code of a
+        // few hundred ops seldom shrinks the eightfold it must.
+        if before < min_ops || (min_ops >= RAY_PRUNE_MIN_OPS && answer.is_native()) {
             return None;
         }
+        let g = gain(answer.as_ref());
+        let p = tape.prune_to_at_most(region, before / g, &mut st.workspace)?;
+        let after = p.tape.len();
         st.stats.pruned_ops_before += before as u64;
         st.stats.pruned_ops_after += after as u64;
         let pruned = Regional::new(region, p.tape, Arc::clone(source));
@@ -408,6 +433,22 @@ impl<'a> Tracer<'a> {
         }
         any.then_some((evals, live))
     }
+}
+
+/// `region` widened by a relative [`REGION_PAD`], so that boxes the
+/// tracer rounds outward from the same rays stay inside it; `None` unless
+/// it is finite.
+fn padded(region: IBox) -> Option<IBox> {
+    if region
+        .iter()
+        .any(|c| c.is_empty() || !c.lo.is_finite() || !c.hi.is_finite())
+    {
+        return None;
+    }
+    Some(region.map(|c| {
+        let pad = REGION_PAD * (c.width() + c.lo.abs().max(c.hi.abs())) + f64::MIN_POSITIVE;
+        Interval::new(c.lo - pad, c.hi + pad)
+    }))
 }
 
 /// Levels of halving a tile's beam along its rays (up to 2^SLICE_DEPTH
