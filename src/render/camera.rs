@@ -199,6 +199,48 @@ impl RayCamera {
         }
     }
 
+    /// The rays through the centres of the `w × h` pixels from `(x0, y0)`,
+    /// row-major: the same bits as [`RayCamera::pixel_ray`] for each, with
+    /// the column terms `c + x·cx` and the row terms `y·cy` computed once
+    /// (outward rounding makes every interval product costly, and a tile's
+    /// rays are a per-pixel cost of every render).
+    pub fn pixel_rays(&self, (x0, y0): (u32, u32), (w, h): (u32, u32)) -> Vec<PixelRay> {
+        let column = |c: DVec3, cx: DVec3| -> Vec<IBox> {
+            (x0..x0 + w)
+                .map(|i| {
+                    let xi = Interval::point(f64::from(i) + 0.5);
+                    std::array::from_fn(|k| {
+                        Interval::point(c[k]).add(xi.mul(Interval::point(cx[k])))
+                    })
+                })
+                .collect()
+        };
+        let row = |cy: DVec3| -> Vec<IBox> {
+            (y0..y0 + h)
+                .map(|j| {
+                    let yj = Interval::point(f64::from(j) + 0.5);
+                    std::array::from_fn(|k| yj.mul(Interval::point(cy[k])))
+                })
+                .collect()
+        };
+        let (oc, dc) = (column(self.o0, self.ox), column(self.d0, self.dx));
+        let (or, dr) = (row(self.oy), row(self.dy));
+        let sum = |a: &IBox, b: &IBox| -> IBox { [a[0].add(b[0]), a[1].add(b[1]), a[2].add(b[2])] };
+        let mut rays = Vec::with_capacity((w * h) as usize);
+        for j in 0..h as usize {
+            for i in 0..w as usize {
+                let (o, d) = (sum(&oc[i], &or[j]), sum(&dc[i], &dr[j]));
+                rays.push(PixelRay {
+                    o,
+                    d,
+                    om: o.map(|c| c.mid()),
+                    dm: d.map(|c| c.mid()),
+                });
+            }
+        }
+        rays
+    }
+
     /// A sound hull of every ray point with screen x ∈ `xs`, y ∈ `ys`
     /// and parameter t ∈ `t` (from the 8 corners, see the module doc).
     pub fn hull(&self, xs: (f64, f64), ys: (f64, f64), t: Interval) -> IBox {
@@ -254,7 +296,7 @@ impl CornerRays {
 }
 
 /// One pixel's ray.
-#[derive(Copy, Clone, Debug)]
+#[derive(Copy, Clone, Debug, PartialEq)]
 pub struct PixelRay {
     /// Enclosure of the origin.
     pub o: IBox,
@@ -309,6 +351,20 @@ mod tests {
                 projection: Projection::Orthographic { width: 3.0 },
             },
         ]
+    }
+
+    #[test]
+    fn a_tiles_rays_are_the_single_pixel_rays() {
+        for cam in cams() {
+            let rc = RayCamera::new(&cam, 37, 23).unwrap();
+            let rays = rc.pixel_rays((5, 2), (9, 7));
+            assert_eq!(rays.len(), 63);
+            for j in 0..7 {
+                for i in 0..9 {
+                    assert_eq!(rays[(j * 9 + i) as usize], rc.pixel_ray(5 + i, 2 + j));
+                }
+            }
+        }
     }
 
     #[test]

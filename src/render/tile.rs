@@ -6,7 +6,6 @@ use std::time::Instant;
 use image::Rgb;
 
 use super::beam::{self, TileRays};
-use super::camera::PixelRay;
 use super::shade::{self, Surf};
 use super::tracer::{PrunedEvals, TileState, Tracer};
 use super::{Class, Method, RenderOptions, output, ray};
@@ -129,18 +128,17 @@ pub(crate) fn render_tile(
 // The tile's pixel rays and their ranges inside the bounds, nothing traced.
 fn tile_rays(tr: &Tracer<'_>, spec: &TileSpec<'_>) -> TileRays {
     let n = (spec.w * spec.h) as usize;
-    let mut rays: Vec<PixelRay> = Vec::with_capacity(n);
-    let mut slabs = Vec::with_capacity(n);
-    for j in 0..spec.h {
-        for i in 0..spec.w {
-            let r = tr.cam.pixel_ray(spec.x0 + i, spec.y0 + j);
-            // Masked-out samples look like rays outside the bounds: beams
-            // over them are rejected at once.
-            let on = spec.mask.is_none_or(|m| m[(j * spec.w + i) as usize]);
-            slabs.push(if on { r.slab(&tr.bounds) } else { None });
-            rays.push(r);
-        }
-    }
+    let rays = tr.cam.pixel_rays((spec.x0, spec.y0), (spec.w, spec.h));
+    // Masked-out samples look like rays outside the bounds: beams over
+    // them are rejected at once.
+    let slabs = rays
+        .iter()
+        .enumerate()
+        .map(|(k, r)| {
+            let on = spec.mask.is_none_or(|m| m[k]);
+            if on { r.slab(&tr.bounds) } else { None }
+        })
+        .collect();
     TileRays {
         starts: Vec::new(),
         x0: spec.x0,
