@@ -136,6 +136,16 @@ impl Regional {
         }
     }
 
+    /// The region of the tree whose own tape answers for every box in
+    /// `hull`, if one does (a batch inside it runs that tape in one pass).
+    fn own_tape_for(&self, hull: &IBox) -> Option<&Tape> {
+        if !box_within(hull, &self.region) {
+            return None;
+        }
+        let node = self.smallest_holding(hull);
+        node.own.then_some(&node.tape)
+    }
+
     /// The evaluator for a point (see [`Self::for_box`]).
     fn for_point(&self, p: [f64; 3]) -> &dyn Evaluator {
         self.for_box(&point_box(p))
@@ -161,6 +171,61 @@ impl Evaluator for Regional {
 
     fn interval_dir(&self, b: [Interval; 3], v: [Interval; 3]) -> [Interval; 2] {
         self.for_box(&b).interval_dir(b, v)
+    }
+
+    /// One pass over the smallest region's tape when every point lies in
+    /// one region that answers with its own tape; point by point
+    /// otherwise. The same bits either way (pruning is exact).
+    fn point_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
+        // A NaN coordinate would vanish from the hull below; such a point
+        // goes to the point-by-point path, as `point` sends it to the parent.
+        let any_nan = xs.iter().chain(ys).chain(zs).any(|v| v.is_nan());
+        let hull = (!out.is_empty() && !any_nan)
+            .then(|| {
+                let span = |v: &[f64]| {
+                    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+                    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                    Interval::new(lo, hi)
+                };
+                [span(xs), span(ys), span(zs)]
+            })
+            .filter(|h| h.iter().all(|c| c.lo <= c.hi));
+        match hull.as_ref().and_then(|h| self.own_tape_for(h)) {
+            Some(tape) => {
+                crate::eval::tape::with_workspace(|ws| tape.point_batch([xs, ys, zs], out, ws))
+            }
+            None => {
+                for (i, o) in out.iter_mut().enumerate() {
+                    *o = self.point([xs[i], ys[i], zs[i]]);
+                }
+            }
+        }
+    }
+
+    /// One pass over the smallest region's tape when every box lies in one
+    /// region that answers with its own tape; box by box otherwise.
+    fn interval_batch(&self, boxes: &[[Interval; 3]], out: &mut [Interval]) {
+        let proper = |b: &IBox| b.iter().all(|c| c.lo <= c.hi);
+        let hull = boxes
+            .iter()
+            .all(proper)
+            .then(|| {
+                boxes
+                    .iter()
+                    .copied()
+                    .reduce(crate::interval::boxes::box_hull)
+            })
+            .flatten();
+        match hull.as_ref().and_then(|h| self.own_tape_for(h)) {
+            Some(tape) => {
+                crate::eval::tape::with_workspace(|ws| tape.interval_batch(boxes, out, ws))
+            }
+            None => {
+                for (b, o) in boxes.iter().zip(out.iter_mut()) {
+                    *o = self.interval(*b);
+                }
+            }
+        }
     }
 
     /// The pruned function (exact on [`Evaluator::valid_region`]).

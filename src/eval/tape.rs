@@ -85,6 +85,16 @@ pub struct Workspace {
     live: Vec<bool>,
 }
 
+thread_local! {
+    static WORKSPACE: std::cell::RefCell<Workspace> = std::cell::RefCell::new(Workspace::default());
+}
+
+/// Runs `f` with this thread's batch workspace (for callers that evaluate
+/// tapes through `&self` APIs, such as the regional evaluator's batches).
+pub fn with_workspace<R>(f: impl FnOnce(&mut Workspace) -> R) -> R {
+    WORKSPACE.with(|ws| f(&mut ws.borrow_mut()))
+}
+
 /// The result of [`Tape::prune`].
 #[derive(Clone, Debug)]
 pub struct PrunedTape {

@@ -152,6 +152,10 @@ fn beam_tests(
         }
         Sweep::Flat => {
             st.stats.blocks_undecided += 1;
+            if (b.x1 - b.x0) * (b.y1 - b.y0) <= FLAT_LEAF_PIXELS {
+                flat_leaf(tr, tile, b, live, st);
+                return;
+            }
             // Pruning nests: each quarter prunes the tape its parent
             // block pruned, one interval pass over a short tape.
             split_pruned(tr, tile, b, (xs, ys, Interval::new(t0, t1)), t0, live, st);
@@ -193,6 +197,89 @@ fn beam_tests(
     // The sub-blocks work near the first candidate piece: prune there.
     let window = Interval::new(ta, t1.min(ta + PRUNE_WINDOW * (tb - ta).max(min_w(ta))));
     split_pruned(tr, tile, b, (xs, ys, window), ta, &sub_live, st);
+}
+
+/// Blocks of a flat scene this small are settled pixel by pixel in
+/// batches (`flat_leaf`) rather than split further.
+const FLAT_LEAF_PIXELS: u32 = 64;
+
+// A small block of a flat scene (f constant along every ray): each pixel
+// is settled from one batch of point values at the rays' starts (f < 0:
+// the ray starts inside, as `ray::starts_inside` decides) and one batch of
+// intervals over the rays' whole ranges (every object proven positive or
+// undefined: no hit, as the first piece of `trace_ray` decides, a flat
+// scene's sweep starting from one piece); only the other pixels get single
+// rays. The batches run each object's tape once over the block
+// (`Evaluator::point_batch`), and give single rays' decisions.
+fn flat_leaf(tr: &Tracer<'_>, tile: &mut TileRays, b: Rect, live: &[u32], st: &mut TileState) {
+    let mut px: Vec<(usize, f64, f64)> = Vec::with_capacity(FLAT_LEAF_PIXELS as usize);
+    for (i, j) in b.pixels() {
+        let k = tile.idx(i, j);
+        tile.hits[k] = None;
+        tile.class[k] = Class::Ray;
+        if let Some((t0, t1)) = tile.slabs[k] {
+            px.push((k, t0, t1));
+        }
+    }
+    let n = px.len();
+    if n == 0 || live.is_empty() {
+        return;
+    }
+    let starts: Vec<[f64; 3]> = px.iter().map(|&(k, t0, _)| tile.rays[k].at(t0)).collect();
+    let coords: [Vec<f64>; 3] = std::array::from_fn(|c| starts.iter().map(|p| p[c]).collect());
+    let mut best = vec![(f64::INFINITY, live[0] as usize); n];
+    let mut v = vec![0.0; n];
+    for &o in live {
+        tr.evals[o as usize].point_batch(&coords[0], &coords[1], &coords[2], &mut v);
+        for (b, &vi) in best.iter_mut().zip(&v) {
+            if vi < b.0 {
+                *b = (vi, o as usize);
+            }
+        }
+    }
+    st.stats.point_evals += (n * live.len()) as u64;
+    let mut rest = Vec::with_capacity(n);
+    for (i, &(k, t0, _)) in px.iter().enumerate() {
+        if best[i].0 < 0.0 {
+            st.stats.pixels_batched += 1;
+            tile.hits[k] = Some(Hit {
+                t: t0,
+                obj: best[i].1,
+                inside: true,
+            });
+        } else {
+            rest.push(i);
+        }
+    }
+    if rest.is_empty() {
+        return;
+    }
+    let boxes: Vec<IBox> = rest
+        .iter()
+        .map(|&i| {
+            let (k, t0, t1) = px[i];
+            let r = &tile.rays[k];
+            ray_box(r.o, r.d, Interval::new(t0, t1))
+        })
+        .collect();
+    let mut clear = vec![true; rest.len()];
+    let mut f = vec![Interval::point(0.0); rest.len()];
+    for &o in live {
+        tr.evals[o as usize].interval_batch(&boxes, &mut f);
+        for (c, fi) in clear.iter_mut().zip(&f) {
+            *c &= fi.is_empty() || fi.lo > 0.0;
+        }
+    }
+    st.stats.interval_evals += (rest.len() * live.len()) as u64;
+    for (&i, clear) in rest.iter().zip(clear) {
+        if clear {
+            st.stats.pixels_batched += 1;
+        } else {
+            let (k, t0, t1) = px[i];
+            let ray = tile.rays[k];
+            tile.hits[k] = trace_ray(tr, &ray, t0, t1, live, st);
+        }
+    }
 }
 
 // Width of the window a split block prunes its functions to, in units of

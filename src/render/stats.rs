@@ -106,6 +106,9 @@ counters! {
         rays: u64 => sum,
         /// Pixels of included blocks, which refine a bracketed root (no ray).
         pixels_refined: u64 => sum,
+        /// Pixels of flat scenes settled by a block's batches of point and
+        /// interval values (no ray).
+        pixels_batched: u64 => sum,
         /// Blocks (over one pixel) whose whole ray range was rejected.
         blocks_rejected: u64 => sum,
         /// Blocks (over one pixel) settled by the inclusion test.
