@@ -253,3 +253,68 @@ impl Evaluator for Regional {
         Some(self)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ir::random::{Rng, random_function};
+
+    fn same(a: f64, b: f64) -> bool {
+        a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
+    }
+
+    // Batches inside the region run the pruned tape in one pass, batches
+    // across its edge go point by point; both give each point's bits, and
+    // interval batches give each box's interval.
+    #[test]
+    fn batches_inside_and_across_the_region_give_single_call_results() {
+        let region = [
+            Interval::new(-0.5, 0.5),
+            Interval::new(-0.25, 1.0),
+            Interval::new(0.0, 0.75),
+        ];
+        let mut rng = Rng::new(9);
+        let mut batched_inside = 0;
+        for seed in 0..200 {
+            let f = random_function(seed, 8);
+            let whole = Tape::new(&f);
+            let mut ws = crate::eval::tape::Workspace::default();
+            let Some(p) = whole.prune(region, &mut ws) else {
+                continue;
+            };
+            let r = Regional::new(region, p.tape, Arc::new(Interpreter::new(f)));
+            for spread in [0.2, 2.0] {
+                let pts: Vec<[f64; 3]> = (0..9)
+                    .map(|_| {
+                        std::array::from_fn(|c| {
+                            region[c].mid() + rng.range(-spread, spread) * region[c].width() / 2.0
+                        })
+                    })
+                    .collect();
+                batched_inside +=
+                    usize::from(pts.iter().all(|p| box_within(&point_box(*p), &region)));
+                let cols: [Vec<f64>; 3] =
+                    std::array::from_fn(|c| pts.iter().map(|p| p[c]).collect());
+                let mut out = vec![0.0; pts.len()];
+                r.point_batch(&cols[0], &cols[1], &cols[2], &mut out);
+                for (p, v) in pts.iter().zip(&out) {
+                    assert!(same(*v, r.point(*p)), "seed {seed} at {p:?}");
+                }
+                let boxes: Vec<IBox> = pts
+                    .iter()
+                    .map(|p| p.map(|c| Interval::new(c - 0.01, c + 0.01)))
+                    .collect();
+                let mut iv = vec![Interval::point(0.0); boxes.len()];
+                r.interval_batch(&boxes, &mut iv);
+                for (b, v) in boxes.iter().zip(&iv) {
+                    let s = r.interval(*b);
+                    assert!(
+                        (v.is_empty() && s.is_empty()) || (same(v.lo, s.lo) && same(v.hi, s.hi)),
+                        "seed {seed} over {b:?}: {v:?} against {s:?}"
+                    );
+                }
+            }
+        }
+        assert!(batched_inside > 20, "{batched_inside} batches inside");
+    }
+}
