@@ -208,15 +208,16 @@ fn sweep_ray(
 ) -> Option<Hit> {
     let mut cand: Vec<(u32, Interval)> = Vec::with_capacity(live.len());
     while let Some((a, b)) = stack.pop() {
-        if tr.prune && (b - a) * RAY_PRUNE_RATIO <= scope {
-            if let Some((evals, live_ops)) = tr.pruned_to_ray(ray, Interval::new(a, b), st) {
-                let local = tr.with_evals(&evals, live_ops);
-                let piece = vec![(a, b)];
-                if let Some(h) = sweep_ray(&local, ray, piece, live, (steps, b - a), st) {
-                    return Some(h);
-                }
-                continue;
+        if tr.prune
+            && (b - a) * RAY_PRUNE_RATIO <= scope
+            && let Some((evals, live_ops)) = tr.pruned_to_ray(ray, Interval::new(a, b), st)
+        {
+            let local = tr.with_evals(&evals, live_ops);
+            let piece = vec![(a, b)];
+            if let Some(h) = sweep_ray(&local, ray, piece, live, (steps, b - a), st) {
+                return Some(h);
             }
+            continue;
         }
         *steps += 1;
         let bx = ray_box(ray.o, ray.d, Interval::new(a, b));
