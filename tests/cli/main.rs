@@ -289,3 +289,113 @@ fn endless_input_is_refused_by_size() {
     assert!(!dir.join("x.png").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Runs `ibeam args…`, killing it and failing if it takes longer than
+/// `limit` (a hang must fail the test, not hang the suite); returns its
+/// output and wall time. Never a panic: exit code 101 or "panicked at"
+/// on stderr fails.
+fn ibeam_within(args: &[&str], limit: std::time::Duration) -> (Output, std::time::Duration) {
+    use std::process::{Command, Stdio};
+    let start = std::time::Instant::now();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_ibeam"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run ibeam");
+    while child.try_wait().expect("wait for ibeam").is_none() {
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("ibeam {args:?} still running after {limit:?}");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let took = start.elapsed();
+    let o = child.wait_with_output().expect("ibeam output");
+    let err = stderr(&o);
+    assert_ne!(
+        o.status.code(),
+        Some(101),
+        "ibeam {args:?} panicked:\n{err}"
+    );
+    assert!(!err.contains("panicked at"), "ibeam {args:?}:\n{err}");
+    (o, took)
+}
+
+#[test]
+fn adversarial_scenes_render_at_64_or_fail_with_a_message_in_time() {
+    // The scenes of tests/stability/adversarial.rs through the binary:
+    // each either renders a 64×64 PNG (exit 0) or exits 1 with the error
+    // named, within 20 s (generous: release takes well under a second,
+    // the ci-debug profile and a loaded machine more), by beam, pixel and
+    // beam with IAA, on the JIT the CLI uses by default.
+    let dir = scratch("adversarial");
+    let scene = |object: &str, half: f64| {
+        let e = [2.0, 1.5, 3.5].map(|c: f64| c * half / 1.2);
+        format!(
+            "object s = {object};\n\
+             camera {{ eye = ({:e}, {:e}, {:e}); target = (0, 0, 0); up = (0, 1, 0); fov = 35; }}\n\
+             bounds = ({:e}, {:e}, {:e}) .. ({half:e}, {half:e}, {half:e});\n",
+            e[0], e[1], e[2], -half, -half, -half
+        )
+    };
+    // (file, scene text, what stderr must hold if the run fails; None
+    // where it must render).
+    let cases = [
+        ("sin", scene("sin(1e300*x) + y*y + z*z - 1", 2.0), None),
+        ("huge", scene("1.7e308*x*x + y - 1", 2.0), None),
+        ("slab", scene("abs(x) - 1e-300", 1.2), None),
+        ("ln", scene("ln(-abs(x)) + y", 1.2), None),
+        ("cancel", scene("1/(x - x)", 1.2), None),
+        (
+            "undefined",
+            scene("sqrt(x - 1e300)", 1.2),
+            Some("undefined everywhere"),
+        ),
+        // The camera 1e300 away: its squared distance overflows, and the
+        // loader refuses the camera.
+        (
+            "far",
+            scene("scale(sphere(1), 1e300)", 1.2e300),
+            Some("camera"),
+        ),
+    ];
+    for (name, text, fails_with) in cases {
+        let file = dir.join(format!("{name}.ib"));
+        std::fs::write(&file, text).unwrap();
+        for extra in [
+            &["--method", "beam"][..],
+            &["--method", "pixel"],
+            &["--aa", "iaa"],
+        ] {
+            let png = dir.join(format!("{name}.png"));
+            let _ = std::fs::remove_file(&png);
+            let mut args = vec![
+                "render",
+                file.to_str().unwrap(),
+                "-o",
+                png.to_str().unwrap(),
+                "--size",
+                "64x64",
+                "--quiet",
+            ];
+            args.extend_from_slice(extra);
+            let (o, took) = ibeam_within(&args, std::time::Duration::from_secs(20));
+            println!("{name} {extra:?}: {took:.2?}, exit {:?}", o.status.code());
+            match fails_with {
+                None => {
+                    assert_eq!(o.status.code(), Some(0), "{name} {extra:?}: {}", stderr(&o));
+                    let img = image::open(&png).unwrap_or_else(|e| panic!("{name}: {e}"));
+                    assert_eq!((img.width(), img.height()), (64, 64), "{name}");
+                }
+                Some(needle) => {
+                    assert_fails(&o, &[needle]);
+                    assert!(!png.exists(), "{name}: no image is written");
+                }
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -15,6 +15,7 @@
 //!
 //! One test binary; the cases are in its modules.
 
+mod adversarial;
 mod extremes;
 mod singular;
 
