@@ -43,7 +43,7 @@ use image::{ImageBuffer, Luma, RgbImage};
 
 pub use aa::{Aa, AaError};
 use camera::CameraError;
-pub use frame::{render, render_aa};
+pub use frame::{Band, Frame, render, render_aa};
 pub use stats::RenderStats;
 pub use tracer::is_flat;
 
@@ -113,7 +113,8 @@ impl RenderOptions {
 pub struct RenderOutput {
     /// The shaded image, sRGB.
     pub image: RgbImage,
-    /// Depth (see [`output::depth_image`]) if asked for.
+    /// Depth (see [`output::depth_image`]; normalised over the camera's
+    /// range over the bounds, [`output::depth_range`]) if asked for.
     pub depth: Option<ImageBuffer<Luma<u16>, Vec<u16>>>,
     /// Normals as `(n + 1) / 2` if asked for.
     pub normals: Option<RgbImage>,
