@@ -41,7 +41,7 @@ fn write_err(path: &Path, e: impl std::fmt::Display) -> CliError {
 pub fn write_pngs<R>(
     files: &[(&Path, Layer)],
     (width, height): (u32, u32),
-    body: impl FnOnce(&mut dyn FnMut(&Band) -> Result<(), CliError>) -> Result<R, CliError>,
+    body: impl FnOnce(&mut (dyn FnMut(&Band) -> Result<(), CliError> + Send)) -> Result<R, CliError>,
 ) -> Result<R, CliError> {
     let mut writers = Vec::with_capacity(files.len());
     for &(path, layer) in files {

@@ -250,7 +250,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         .iter()
         .filter_map(|&(p, l)| Some((p?.as_path(), l)))
         .collect();
-    let mut stats = write_pngs(&files, (width, height), |sink| Ok(frame.stream(sink)?))?;
+    let mut stats = write_pngs(&files, (width, height), |sink| frame.stream(sink))?;
     stats.compile_ms += compile_ms;
 
     if let Some(p) = &args.stats_json {

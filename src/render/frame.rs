@@ -144,10 +144,15 @@ impl<'a> Frame<'a> {
 
     /// Traces one row of tiles at a time (the row's tiles in parallel) and
     /// hands each finished band of image rows to `sink`, top to bottom, so
-    /// memory holds one row of tiles, not the image. Returns the counters
-    /// (the same as [`Frame::render`]'s); its `output_ms` includes the
-    /// time spent in `sink`. Stops at the first error of `sink`.
-    pub fn stream<E>(self, mut sink: impl FnMut(&Band) -> Result<(), E>) -> Result<RenderStats, E> {
+    /// memory holds one row of tiles and two bands, not the image. `sink`
+    /// runs on a worker of the render's pool while the next row is traced.
+    /// Returns the counters (the same as [`Frame::render`]'s); its
+    /// `output_ms` includes the time spent in `sink`. Stops at the first
+    /// error of `sink`.
+    pub fn stream<E: Send>(
+        self,
+        mut sink: impl FnMut(&Band) -> Result<(), E> + Send,
+    ) -> Result<RenderStats, E> {
         let (w, h) = (self.opts.width, self.opts.height);
         let mut stats = RenderStats {
             width: w,
@@ -157,16 +162,29 @@ impl<'a> Frame<'a> {
         let total = tiles(w, h).len();
         let done = AtomicUsize::new(0);
         let mut output_ms = 0.0;
+        let mut pending: Option<Band> = None;
+        let mut emit = |b: Band| -> Result<f64, E> {
+            let t0 = Instant::now();
+            sink(&b)?;
+            Ok(ms_since(t0))
+        };
         for y0 in (0..h).step_by(TILE as usize) {
             let row = tile_row(w, h, y0);
-            let outs = self.trace(&row, &done, total);
+            // Encoding the last band overlaps tracing this row: the sink
+            // is serial (one file, top to bottom), the tracing is not.
+            let (outs, written) = self.pool.install(|| {
+                rayon::join(
+                    || self.trace(&row, &done, total),
+                    || pending.take().map_or(Ok(0.0), &mut emit),
+                )
+            });
+            output_ms += written?;
             let t0 = Instant::now();
-            let band = band(&outs, &self.opts, y0, self.depth_range, &mut stats);
-            // The tiles' buffers go before the sink runs: with them, a row
-            // would briefly be held twice.
-            drop(outs);
-            sink(&band)?;
+            pending = Some(band(&outs, &self.opts, y0, self.depth_range, &mut stats));
             output_ms += ms_since(t0);
+        }
+        if let Some(b) = pending {
+            output_ms += emit(b)?;
         }
         if self.opts.progress {
             eprintln!();

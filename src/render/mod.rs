@@ -26,6 +26,10 @@
 //! holds the state every tile reads and the state each tile carries (its
 //! counters and the mean-value policy's record); `probe` has the beam
 //! tests that [`beam`] and [`aa`] share.
+//!
+//! [`Frame::stream`] is the bounded-memory path: it traces one row of
+//! tiles at a time and hands out finished bands of image rows, which the
+//! CLI encodes into PNGs as they come.
 
 pub mod aa;
 pub mod beam;
