@@ -6,6 +6,7 @@ pub mod accuracy;
 pub mod bench;
 pub mod eval;
 pub mod ir;
+pub mod png_stream;
 pub mod render;
 
 pub use ibeam::eval::{EvalKind, build_evaluator, build_evaluators};

@@ -6,10 +6,11 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use super::png_stream::{Layer, write_pngs};
 use super::{CliError, EvalKind};
 use ibeam::render::aa::{DEFAULT_DEPTH, DEFAULT_THRESHOLD, MAX_DEPTH};
 use ibeam::render::camera::RayCamera;
-use ibeam::render::{Aa, MAX_SIZE, Method, RenderOptions, render_aa};
+use ibeam::render::{Aa, Frame, MAX_SIZE, Method, RenderOptions};
 
 /// Visibility method on the command line.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, clap::ValueEnum, Default)]
@@ -86,7 +87,10 @@ pub struct Args {
     /// Evaluator: native code (default) or the reference interpreter.
     #[arg(long = "eval", value_enum, default_value_t = EvalKind::Jit)]
     pub eval: EvalKind,
-    /// Also write a 16-bit depth PNG (nearest hit 0, background 65535).
+    /// Also write a 16-bit depth PNG: the distance along the view
+    /// direction, mapped linearly from the nearest (0) to the farthest
+    /// (65534) point of the scene bounds; background 65535. The range is
+    /// the bounds', not the hits', so it is fixed before tracing.
     #[arg(long)]
     pub depth: Option<PathBuf>,
     /// Also write a normal map PNG ((n + 1) / 2).
@@ -233,32 +237,29 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         progress: !args.quiet && std::io::stderr().is_terminal(),
         prune: !args.no_prune,
     };
-    let mut out = render_aa(&scene, &evaluators, &opts, aa)?;
-    out.stats.compile_ms += compile_ms;
+    // Checked before any output is truncated: a scene that cannot render
+    // leaves existing files as they were.
+    let frame = Frame::new(&scene, &evaluators, &opts, aa)?;
+    let layers = [
+        (Some(&args.output), Layer::Color),
+        (args.depth.as_ref(), Layer::Depth),
+        (args.normals.as_ref(), Layer::Normals),
+        (args.classify.as_ref(), Layer::Classify),
+    ];
+    let files: Vec<(&Path, Layer)> = layers
+        .iter()
+        .filter_map(|&(p, l)| Some((p?.as_path(), l)))
+        .collect();
+    let mut stats = write_pngs(&files, (width, height), |sink| frame.stream(sink))?;
+    stats.compile_ms += compile_ms;
 
-    let png = |img: &dyn Fn(&Path) -> image::ImageResult<()>, p: &Path| -> Result<(), CliError> {
-        img(p).map_err(|e| format!("cannot write {}: {e}", p.display()).into())
-    };
-    png(
-        &|p| out.image.save_with_format(p, image::ImageFormat::Png),
-        &args.output,
-    )?;
-    if let (Some(p), Some(img)) = (&args.depth, &out.depth) {
-        png(&|p| img.save_with_format(p, image::ImageFormat::Png), p)?;
-    }
-    if let (Some(p), Some(img)) = (&args.normals, &out.normals) {
-        png(&|p| img.save_with_format(p, image::ImageFormat::Png), p)?;
-    }
-    if let (Some(p), Some(img)) = (&args.classify, &out.classify) {
-        png(&|p| img.save_with_format(p, image::ImageFormat::Png), p)?;
-    }
     if let Some(p) = &args.stats_json {
-        let text = serde_json::to_string_pretty(&out.stats.to_json())?;
+        let text = serde_json::to_string_pretty(&stats.to_json())?;
         std::fs::write(p, text + "\n").map_err(|e| format!("cannot write {}: {e}", p.display()))?;
     }
     outputs.done = true;
     if !args.quiet {
-        eprintln!("{}", out.stats);
+        eprintln!("{stats}");
     }
     Ok(())
 }

@@ -38,62 +38,206 @@ pub fn render_aa(
     opts: &RenderOptions,
     aa: Aa,
 ) -> Result<RenderOutput, RenderError> {
-    let start = Instant::now();
-    let compiled_before = compile_ms(evaluators);
-    check(scene, evaluators, opts, aa)?;
-    let (w, h) = (opts.width, opts.height);
-    let s = aa.grid_factor();
-    let cam = RayCamera::new(&scene.camera, w * s, h * s).map_err(RenderError::Camera)?;
-    let tr = Tracer::new(scene, evaluators, cam, opts.prune);
-    // IAA traces split pixels' sub-samples on the 2^depth× image, with its
-    // tighter depth tolerance (the samples are those of grid:2^depth).
-    let fine = match aa {
-        Aa::Iaa { depth, .. } => Some(tr.with_camera(
-            RayCamera::new(&scene.camera, w << depth, h << depth).map_err(RenderError::Camera)?,
-        )),
-        _ => None,
-    };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(opts.threads.unwrap_or(0))
-        .build()
-        .map_err(|e| RenderError::Threads(e.to_string()))?;
-    let tiles = tiles(w, h);
-    let done = AtomicUsize::new(0);
-    let bg = scene.render.background;
-    let outs: Vec<TileOut> = pool.install(|| {
-        tiles
-            .par_iter()
-            .map(|&(x0, y0, tw, th)| {
-                let spec = TileSpec {
-                    x0: x0 * s,
-                    y0: y0 * s,
-                    w: tw * s,
-                    h: th * s,
-                    mask: None,
-                };
-                let mut out = render_tile(&tr, opts, spec, bg);
-                if s > 1 {
-                    out = downsample(out, s);
-                }
-                anti_alias(&tr, fine.as_ref(), opts, aa, &mut out, bg);
-                let n = done.fetch_add(1, Ordering::Relaxed) + 1;
-                if opts.progress {
-                    eprint!("\rrendering: {n}/{} tiles", tiles.len());
-                }
-                out
-            })
-            .collect()
-    });
-    if opts.progress {
-        eprintln!();
+    Ok(Frame::new(scene, evaluators, opts, aa)?.render())
+}
+
+/// A render whose scene, evaluators and options have been checked, ready
+/// to trace: whole into memory ([`Frame::render`]) or one row of tiles at
+/// a time ([`Frame::stream`]), with the same pixels and counters.
+pub struct Frame<'a> {
+    evaluators: &'a [Arc<dyn Evaluator>],
+    opts: RenderOptions,
+    aa: Aa,
+    tr: Tracer<'a>,
+    fine: Option<Tracer<'a>>,
+    pool: rayon::ThreadPool,
+    bg: [f64; 3],
+    depth_range: (f64, f64),
+    start: Instant,
+    compiled_before: f64,
+}
+
+/// Finished image rows `y0..y0 + rows`, each `width` pixels, row-major;
+/// [`Frame::stream`] hands them out top to bottom.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Band {
+    /// First image row of the band.
+    pub y0: u32,
+    /// Rows in the band.
+    pub rows: u32,
+    /// Pixels in a row.
+    pub width: u32,
+    /// The shaded image, 8-bit sRGB, 3 bytes a pixel.
+    pub color: Vec<u8>,
+    /// Depth as [`output::depth_u16`] encodes it, if asked for.
+    pub depth: Option<Vec<u16>>,
+    /// Normals as [`output::normal_pixel`], 3 bytes a pixel, if asked for.
+    pub normals: Option<Vec<u8>>,
+    /// Classification colours, 3 bytes a pixel, if asked for.
+    pub classify: Option<Vec<u8>>,
+}
+
+impl<'a> Frame<'a> {
+    /// Checks a render and sets it up (cameras, threads) without tracing.
+    pub fn new(
+        scene: &'a Scene,
+        evaluators: &'a [Arc<dyn Evaluator>],
+        opts: &RenderOptions,
+        aa: Aa,
+    ) -> Result<Frame<'a>, RenderError> {
+        let start = Instant::now();
+        let compiled_before = compile_ms(evaluators);
+        check(scene, evaluators, opts, aa)?;
+        let (w, h) = (opts.width, opts.height);
+        let s = aa.grid_factor();
+        let cam = RayCamera::new(&scene.camera, w * s, h * s).map_err(RenderError::Camera)?;
+        let tr = Tracer::new(scene, evaluators, cam, opts.prune);
+        // IAA traces split pixels' sub-samples on the 2^depth× image, with its
+        // tighter depth tolerance (the samples are those of grid:2^depth).
+        let fine = match aa {
+            Aa::Iaa { depth, .. } => Some(
+                tr.with_camera(
+                    RayCamera::new(&scene.camera, w << depth, h << depth)
+                        .map_err(RenderError::Camera)?,
+                ),
+            ),
+            _ => None,
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(opts.threads.unwrap_or(0))
+            .build()
+            .map_err(|e| RenderError::Threads(e.to_string()))?;
+        Ok(Frame {
+            evaluators,
+            opts: opts.clone(),
+            aa,
+            tr,
+            fine,
+            pool,
+            bg: scene.render.background,
+            depth_range: output::depth_range(&scene.camera, &scene.bounds),
+            start,
+            compiled_before,
+        })
     }
-    let mut out = assemble(&outs, opts, bg);
-    // Native code compiles lazily, on an evaluator kind's first use during
-    // the render; that time is reported as compilation, not rendering.
-    let lazy_compile_ms = compile_ms(evaluators) - compiled_before;
-    out.stats.compile_ms += lazy_compile_ms;
-    out.stats.time_ms = ms_since(start) - lazy_compile_ms;
-    Ok(out)
+
+    /// The camera's ray parameter range over the scene bounds, which the
+    /// depth image maps to 0..=65534 (see [`output::depth_range`]).
+    pub fn depth_range(&self) -> (f64, f64) {
+        self.depth_range
+    }
+
+    /// Traces every tile at once and keeps the whole image in memory
+    /// (about 100 bytes a pixel at the peak).
+    pub fn render(self) -> RenderOutput {
+        let all = tiles(self.opts.width, self.opts.height);
+        let done = AtomicUsize::new(0);
+        let outs = self.trace(&all, &done, all.len());
+        if self.opts.progress {
+            eprintln!();
+        }
+        let mut out = assemble(&outs, &self.opts, self.bg, self.depth_range);
+        drop(outs);
+        self.finish_times(&mut out.stats);
+        out
+    }
+
+    /// Traces one row of tiles at a time (the row's tiles in parallel) and
+    /// hands each finished band of image rows to `sink`, top to bottom, so
+    /// memory holds one row of tiles and two bands, not the image. `sink`
+    /// runs on a worker of the render's pool while the next row is traced.
+    /// Returns the counters (the same as [`Frame::render`]'s); its
+    /// `output_ms` includes the time spent in `sink`. Stops at the first
+    /// error of `sink`.
+    pub fn stream<E: Send>(
+        self,
+        mut sink: impl FnMut(&Band) -> Result<(), E> + Send,
+    ) -> Result<RenderStats, E> {
+        let (w, h) = (self.opts.width, self.opts.height);
+        let mut stats = RenderStats {
+            width: w,
+            height: h,
+            ..RenderStats::default()
+        };
+        let total = tiles(w, h).len();
+        let done = AtomicUsize::new(0);
+        let mut output_ms = 0.0;
+        let mut pending: Option<Band> = None;
+        let mut emit = |b: Band| -> Result<f64, E> {
+            let t0 = Instant::now();
+            sink(&b)?;
+            Ok(ms_since(t0))
+        };
+        for y0 in (0..h).step_by(TILE as usize) {
+            let row = tile_row(w, h, y0);
+            // Encoding the last band overlaps tracing this row: the sink
+            // is serial (one file, top to bottom), the tracing is not.
+            let (outs, written) = self.pool.install(|| {
+                rayon::join(
+                    || self.trace(&row, &done, total),
+                    || pending.take().map_or(Ok(0.0), &mut emit),
+                )
+            });
+            output_ms += written?;
+            let t0 = Instant::now();
+            pending = Some(band(&outs, &self.opts, y0, self.depth_range, &mut stats));
+            output_ms += ms_since(t0);
+        }
+        if let Some(b) = pending {
+            output_ms += emit(b)?;
+        }
+        if self.opts.progress {
+            eprintln!();
+        }
+        stats.output_ms = output_ms;
+        self.finish_times(&mut stats);
+        Ok(stats)
+    }
+
+    // Traces `tiles` in parallel, each with its anti-aliasing; the results
+    // in the order of `tiles`.
+    fn trace(
+        &self,
+        tiles: &[(u32, u32, u32, u32)],
+        done: &AtomicUsize,
+        total: usize,
+    ) -> Vec<TileOut> {
+        let s = self.aa.grid_factor();
+        let (tr, opts, bg) = (&self.tr, &self.opts, self.bg);
+        self.pool.install(|| {
+            tiles
+                .par_iter()
+                .map(|&(x0, y0, tw, th)| {
+                    let spec = TileSpec {
+                        x0: x0 * s,
+                        y0: y0 * s,
+                        w: tw * s,
+                        h: th * s,
+                        mask: None,
+                    };
+                    let mut out = render_tile(tr, opts, spec, bg);
+                    if s > 1 {
+                        out = downsample(out, s);
+                    }
+                    anti_alias(tr, self.fine.as_ref(), opts, self.aa, &mut out, bg);
+                    let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+                    if opts.progress {
+                        eprint!("\rrendering: {n}/{total} tiles");
+                    }
+                    out
+                })
+                .collect()
+        })
+    }
+
+    // Sets the render-wide times: native code compiles lazily, on an
+    // evaluator kind's first use during the render; that time is reported
+    // as compilation, not rendering.
+    fn finish_times(&self, stats: &mut RenderStats) {
+        let lazy_compile_ms = compile_ms(self.evaluators) - self.compiled_before;
+        stats.compile_ms += lazy_compile_ms;
+        stats.time_ms = ms_since(self.start) - lazy_compile_ms;
+    }
 }
 
 // Time the evaluators have spent compiling native code so far, ms.
@@ -156,18 +300,73 @@ fn check(
 
 // The tiles of a w×h image, row by row: (x0, y0, width, height).
 fn tiles(w: u32, h: u32) -> Vec<(u32, u32, u32, u32)> {
-    let mut tiles = Vec::new();
-    for y0 in (0..h).step_by(TILE as usize) {
-        for x0 in (0..w).step_by(TILE as usize) {
-            tiles.push((x0, y0, TILE.min(w - x0), TILE.min(h - y0)));
+    (0..h)
+        .step_by(TILE as usize)
+        .flat_map(|y0| tile_row(w, h, y0))
+        .collect()
+}
+
+// The row of tiles whose top is image row y0, left to right.
+fn tile_row(w: u32, h: u32, y0: u32) -> Vec<(u32, u32, u32, u32)> {
+    (0..w)
+        .step_by(TILE as usize)
+        .map(|x0| (x0, y0, TILE.min(w - x0), TILE.min(h - y0)))
+        .collect()
+}
+
+// One row of tiles (`outs`, left to right) as a band of output pixels;
+// merges the tiles' counters, and the band's hit pixels, into `stats` in
+// tile order, as `assemble` does.
+fn band(
+    outs: &[TileOut],
+    opts: &RenderOptions,
+    y0: u32,
+    depth_range: (f64, f64),
+    stats: &mut RenderStats,
+) -> Band {
+    let w = opts.width as usize;
+    let rows = outs.first().map_or(0, |t| t.h);
+    let n = w * rows as usize;
+    let mut b = Band {
+        y0,
+        rows,
+        width: opts.width,
+        color: vec![0; 3 * n],
+        depth: opts.want_depth.then(|| vec![0; n]),
+        normals: opts.want_normals.then(|| vec![0; 3 * n]),
+        classify: opts.want_classify.then(|| vec![0; 3 * n]),
+    };
+    for t in outs {
+        stats.merge(&t.state.stats);
+        for j in 0..t.h {
+            for i in 0..t.w {
+                let src = (j * t.w + i) as usize;
+                let dst = (j as usize) * w + (t.x0 + i) as usize;
+                b.color[3 * dst..3 * dst + 3].copy_from_slice(&output::srgb_pixel(t.linear[src]).0);
+                stats.pixels_hit += u64::from(t.depth[src].is_finite());
+                if let Some(d) = b.depth.as_mut() {
+                    d[dst] = output::depth_u16(t.depth[src], depth_range);
+                }
+                if let (Some(n), Some(tn)) = (b.normals.as_mut(), t.normals.as_ref()) {
+                    n[3 * dst..3 * dst + 3].copy_from_slice(&tn[src].0);
+                }
+                if let (Some(c), Some(tc)) = (b.classify.as_mut(), t.class.as_ref()) {
+                    c[3 * dst..3 * dst + 3].copy_from_slice(&tc[src].0);
+                }
+            }
         }
     }
-    tiles
+    b
 }
 
 // The render's images and counters from its tiles, in tile order (times
 // other than the output's own are left to the caller).
-fn assemble(outs: &[TileOut], opts: &RenderOptions, bg_linear: [f64; 3]) -> RenderOutput {
+fn assemble(
+    outs: &[TileOut],
+    opts: &RenderOptions,
+    bg_linear: [f64; 3],
+    depth_range: (f64, f64),
+) -> RenderOutput {
     let out_start = Instant::now();
     let (w, h) = (opts.width, opts.height);
     let npx = (w as usize) * (h as usize);
@@ -207,7 +406,9 @@ fn assemble(outs: &[TileOut], opts: &RenderOptions, bg_linear: [f64; 3]) -> Rend
     }
     stats.pixels_hit = hit_mask.iter().filter(|&&m| m).count() as u64;
     let image = output::rgb_image(w, h, &color);
-    let depth = opts.want_depth.then(|| output::depth_image(w, h, &depth_t));
+    let depth = opts
+        .want_depth
+        .then(|| output::depth_image(w, h, &depth_t, depth_range));
     let normals = normals.map(|px| output::rgb_image(w, h, &px));
     let classify = class.map(|px| output::rgb_image(w, h, &px));
     stats.output_ms = ms_since(out_start);

@@ -26,6 +26,10 @@
 //! holds the state every tile reads and the state each tile carries (its
 //! counters and the mean-value policy's record); `probe` has the beam
 //! tests that [`beam`] and [`aa`] share.
+//!
+//! [`Frame::stream`] is the bounded-memory path: it traces one row of
+//! tiles at a time and hands out finished bands of image rows, which the
+//! CLI encodes into PNGs as they come.
 
 pub mod aa;
 pub mod beam;
@@ -43,7 +47,7 @@ use image::{ImageBuffer, Luma, RgbImage};
 
 pub use aa::{Aa, AaError};
 use camera::CameraError;
-pub use frame::{render, render_aa};
+pub use frame::{Band, Frame, render, render_aa};
 pub use stats::RenderStats;
 pub use tracer::is_flat;
 
@@ -113,7 +117,8 @@ impl RenderOptions {
 pub struct RenderOutput {
     /// The shaded image, sRGB.
     pub image: RgbImage,
-    /// Depth (see [`output::depth_image`]) if asked for.
+    /// Depth (see [`output::depth_image`]; normalised over the camera's
+    /// range over the bounds, [`output::depth_range`]) if asked for.
     pub depth: Option<ImageBuffer<Luma<u16>, Vec<u16>>>,
     /// Normals as `(n + 1) / 2` if asked for.
     pub normals: Option<RgbImage>,

@@ -1,7 +1,11 @@
 //! Turning per-pixel results into images: sRGB colour, 16-bit depth,
 //! normals and a classification map.
 
+use glam::DVec3;
 use image::{ImageBuffer, Luma, Rgb, RgbImage};
+
+use super::camera::normalize;
+use crate::scene::{Bounds, Camera};
 
 /// Encodes one linear channel in [0, 1] as 8-bit sRGB.
 pub fn srgb_u8(c: f64) -> u8 {
@@ -19,20 +23,58 @@ pub fn srgb_pixel(c: [f64; 3]) -> Rgb<u8> {
     Rgb([srgb_u8(c[0]), srgb_u8(c[1]), srgb_u8(c[2])])
 }
 
-/// A 16-bit depth image: hits map linearly from the nearest (0) to the
-/// farthest (65534) hit; background is 65535.
-pub fn depth_image(w: u32, h: u32, depth_t: &[f64]) -> ImageBuffer<Luma<u16>, Vec<u16>> {
-    let finite = depth_t.iter().copied().filter(|t| t.is_finite());
-    let lo = finite.clone().fold(f64::INFINITY, f64::min);
-    let hi = finite.fold(f64::NEG_INFINITY, f64::max);
-    let span = if hi > lo { hi - lo } else { 1.0 };
+/// The range of ray parameters a hit can have: the camera's t over the
+/// scene bounds, `(near, far)`, which the depth image maps to 0..=65534.
+///
+/// Every ray has unit component along the view direction `w` (a
+/// perspective ray is `w` plus screen offsets, an orthographic one is `w`
+/// from a point in the eye's plane), so t is the depth `(p - eye) · w`;
+/// being linear, it is extreme at corners of the bounds. Hits lie inside
+/// the bounds at t ≥ 0, so they fall in this range (up to rounding, which
+/// [`depth_u16`] clamps), and the range is known before anything is
+/// traced: a streamed render needs no second pass, and the same scene and
+/// camera give the same depth code at any size.
+pub fn depth_range(cam: &Camera, b: &Bounds) -> (f64, f64) {
+    let eye = DVec3::from_array(cam.eye);
+    let Some(w) = normalize(DVec3::from_array(cam.target) - eye) else {
+        // No camera, so no hits: any range will do.
+        return (0.0, 1.0);
+    };
+    let (mut near, mut far) = (f64::INFINITY, f64::NEG_INFINITY);
+    for k in 0..8 {
+        let c = DVec3::from_array(std::array::from_fn(|i| {
+            if k >> i & 1 == 0 { b.min[i] } else { b.max[i] }
+        }));
+        let t = (c - eye).dot(w);
+        near = near.min(t);
+        far = far.max(t);
+    }
+    // Rays start at t = 0: an eye inside the bounds sees from there.
+    (near.max(0.0), far.max(0.0))
+}
+
+/// One depth pixel: t mapped linearly from `near` (0) to `far` (65534) of
+/// [`depth_range`], clamped to that; background (+inf) is 65535.
+pub fn depth_u16(t: f64, (near, far): (f64, f64)) -> u16 {
+    if !t.is_finite() {
+        return u16::MAX;
+    }
+    // A degenerate range (bounds seen edge-on, or behind the eye) would
+    // divide by zero: its hits all map near 0.
+    let span = if far > near { far - near } else { 1.0 };
+    (((t - near) / span) * 65534.0).round().clamp(0.0, 65534.0) as u16
+}
+
+/// A 16-bit depth image of [`depth_u16`] pixels over `range` (see
+/// [`depth_range`]).
+pub fn depth_image(
+    w: u32,
+    h: u32,
+    depth_t: &[f64],
+    range: (f64, f64),
+) -> ImageBuffer<Luma<u16>, Vec<u16>> {
     ImageBuffer::from_fn(w, h, |x, y| {
-        let t = depth_t[(y * w + x) as usize];
-        if t.is_finite() {
-            Luma([(((t - lo) / span) * 65534.0).round().clamp(0.0, 65534.0) as u16])
-        } else {
-            Luma([u16::MAX])
-        }
+        Luma([depth_u16(depth_t[(y * w + x) as usize], range)])
     })
 }
 
@@ -65,9 +107,34 @@ mod tests {
 
     #[test]
     fn depth_orders_hits_and_marks_background() {
-        let img = depth_image(3, 1, &[1.0, f64::INFINITY, 3.0]);
+        let img = depth_image(4, 1, &[1.0, f64::INFINITY, 3.0, 2.0], (1.0, 3.0));
         assert_eq!(img.get_pixel(0, 0).0[0], 0);
         assert_eq!(img.get_pixel(1, 0).0[0], u16::MAX);
         assert_eq!(img.get_pixel(2, 0).0[0], 65534);
+        assert_eq!(img.get_pixel(3, 0).0[0], 32767);
+        // Rounding can put a hit a hair outside the range: clamped.
+        assert_eq!(depth_u16(0.5, (1.0, 3.0)), 0);
+        assert_eq!(depth_u16(3.5, (1.0, 3.0)), 65534);
+        assert_eq!(depth_u16(2.0, (2.0, 2.0)), 0);
+    }
+
+    #[test]
+    fn depth_range_is_the_view_depth_of_the_bounds() {
+        let b = Bounds {
+            min: [-1.0; 3],
+            max: [1.0; 3],
+        };
+        let cam = Camera {
+            eye: [0.0, 0.0, 5.0],
+            target: [0.0; 3],
+            ..Camera::default()
+        };
+        assert_eq!(depth_range(&cam, &b), (4.0, 6.0));
+        // From inside the bounds, rays start at t = 0.
+        let inside = Camera {
+            eye: [0.0, 0.0, 0.5],
+            ..cam
+        };
+        assert_eq!(depth_range(&inside, &b), (0.0, 1.5));
     }
 }

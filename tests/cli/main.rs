@@ -399,3 +399,83 @@ fn adversarial_scenes_render_at_64_or_fail_with_a_message_in_time() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn streamed_pngs_match_the_in_memory_render() {
+    use ibeam::eval::{EvalKind, build_evaluators};
+    use ibeam::render::{Aa, RenderOptions, render_aa};
+    let dir = scratch("stream");
+    for name in ["sphere.ib", "csg.ib", "torus.ib"] {
+        let scene = ibeam::lang::load_scene(&example(name)).unwrap();
+        let ev = build_evaluators(&scene, EvalKind::Interp).unwrap();
+        let aas = [
+            ("none", Aa::None),
+            ("grid:2", Aa::Grid(2)),
+            (
+                "iaa",
+                Aa::Iaa {
+                    threshold: ibeam::render::aa::DEFAULT_THRESHOLD,
+                    depth: ibeam::render::aa::DEFAULT_DEPTH,
+                },
+            ),
+        ];
+        for (flag, aa) in aas {
+            let o = RenderOptions {
+                want_depth: true,
+                want_normals: true,
+                want_classify: true,
+                ..RenderOptions::new(37, 66)
+            };
+            let want = render_aa(&scene, &ev, &o, aa).unwrap();
+            let mut first: Option<Vec<Vec<u8>>> = None;
+            for threads in ["1", "2"] {
+                let files = ["c.png", "d.png", "n.png", "k.png"].map(|f| dir.join(f));
+                let [c, d, n, k] = files.each_ref().map(|p| p.to_str().unwrap());
+                let args = [
+                    "--size",
+                    "37x66",
+                    "--aa",
+                    flag,
+                    "--threads",
+                    threads,
+                    "--depth",
+                    d,
+                    "--normals",
+                    n,
+                    "--classify",
+                    k,
+                ];
+                let out = render(&example(name), Path::new(c), &args);
+                let what = format!("{name} --aa {flag} --threads {threads}");
+                assert_eq!(out.status.code(), Some(0), "{what}: {}", stderr(&out));
+                let read = |p: &Path| image::open(p).unwrap();
+                assert_eq!(read(&files[0]).to_rgb8(), want.image, "{what}");
+                assert_eq!(read(&files[1]).to_luma16(), *want.depth.as_ref().unwrap());
+                assert_eq!(read(&files[2]).to_rgb8(), *want.normals.as_ref().unwrap());
+                assert_eq!(read(&files[3]).to_rgb8(), *want.classify.as_ref().unwrap());
+                // The files themselves are the same for any thread count.
+                let bytes: Vec<Vec<u8>> = files.iter().map(|p| std::fs::read(p).unwrap()).collect();
+                match &first {
+                    None => first = Some(bytes),
+                    Some(f) => assert!(*f == bytes, "{what}"),
+                }
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn unwritable_auxiliary_output_fails_before_rendering() {
+    let dir = scratch("unwritable-aux");
+    let png = dir.join("a.png");
+    let o = render(
+        &example("sphere.ib"),
+        &png,
+        &["--size", "8x8", "--normals", "/nonexistent/dir/n.png"],
+    );
+    assert_fails(&o, &["cannot write", "/nonexistent/dir/n.png"]);
+    // The colour image this run created is removed again.
+    assert!(!png.exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}

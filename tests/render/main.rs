@@ -5,6 +5,7 @@
 //! One test binary; the tests are in its modules.
 
 mod scenes;
+mod stream;
 mod tracing;
 
 use std::sync::Arc;

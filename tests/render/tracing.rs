@@ -65,7 +65,20 @@ fn auxiliary_images_show_normals_depth_and_classes() {
         );
     }
     let depth = out.depth.as_ref().unwrap();
-    assert!(depth.get_pixel(24, 24).0[0] < 1000);
+    // Depth is normalised over the bounds' view-depth range, fixed before
+    // tracing; the centre of the sphere is nearer than its rim.
+    let range = ibeam::render::output::depth_range(&sc.camera, &sc.bounds);
+    let centre = depth.get_pixel(24, 24).0[0];
+    let k = 24 * 48 + 24;
+    assert_eq!(
+        centre,
+        ibeam::render::output::depth_u16(out.depth_t[k], range)
+    );
+    let rim = (0..48)
+        .map(|i| depth.get_pixel(i, 24).0[0])
+        .find(|&d| d != u16::MAX)
+        .unwrap();
+    assert!(centre < rim, "{centre} {rim}");
     assert_eq!(depth.get_pixel(0, 0).0[0], u16::MAX);
     assert_eq!(
         *out.normals.as_ref().unwrap().get_pixel(0, 0),

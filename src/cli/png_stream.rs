@@ -1,0 +1,89 @@
+//! PNGs written a band of rows at a time, with the `png` crate's streaming
+//! encoder, so a render never holds a whole image.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::Path;
+
+use super::CliError;
+use ibeam::render::Band;
+
+/// Which of a band's images a file gets.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum Layer {
+    /// The shaded image, 8-bit sRGB.
+    Color,
+    /// Depth, 16-bit grey.
+    Depth,
+    /// Normals, 8-bit RGB.
+    Normals,
+    /// Classification, 8-bit RGB.
+    Classify,
+}
+
+impl Layer {
+    fn format(self) -> (png::ColorType, png::BitDepth) {
+        match self {
+            Layer::Depth => (png::ColorType::Grayscale, png::BitDepth::Sixteen),
+            _ => (png::ColorType::Rgb, png::BitDepth::Eight),
+        }
+    }
+}
+
+fn write_err(path: &Path, e: impl std::fmt::Display) -> CliError {
+    format!("cannot write {}: {e}", path.display()).into()
+}
+
+/// Creates (truncates) every `(path, layer)` file of a `size` image and
+/// writes its header, then runs `body` with a sink that appends a band to
+/// each file, then ends and flushes every file, so an I/O error anywhere
+/// (a full disk included) is returned, not lost in a drop.
+pub fn write_pngs<R>(
+    files: &[(&Path, Layer)],
+    (width, height): (u32, u32),
+    body: impl FnOnce(&mut (dyn FnMut(&Band) -> Result<(), CliError> + Send)) -> Result<R, CliError>,
+) -> Result<R, CliError> {
+    let mut writers = Vec::with_capacity(files.len());
+    for &(path, layer) in files {
+        let file = File::create(path).map_err(|e| write_err(path, e))?;
+        let mut enc = png::Encoder::new(BufWriter::new(file), width, height);
+        let (color, depth) = layer.format();
+        enc.set_color(color);
+        enc.set_depth(depth);
+        writers.push(enc.write_header().map_err(|e| write_err(path, e))?);
+    }
+    let result = {
+        // The stream writers borrow `writers`, which end the files after.
+        let mut streams = Vec::with_capacity(files.len());
+        for (w, &(path, _)) in writers.iter_mut().zip(files) {
+            streams.push(w.stream_writer().map_err(|e| write_err(path, e))?);
+        }
+        let mut scratch = Vec::new();
+        let mut sink = |band: &Band| -> Result<(), CliError> {
+            for (s, &(path, layer)) in streams.iter_mut().zip(files) {
+                let bytes: &[u8] = match layer {
+                    Layer::Color => &band.color,
+                    Layer::Depth => {
+                        scratch.clear();
+                        let d = band.depth.as_deref().unwrap_or_default();
+                        scratch.extend(d.iter().flat_map(|v| v.to_be_bytes()));
+                        &scratch
+                    }
+                    Layer::Normals => band.normals.as_deref().unwrap_or_default(),
+                    Layer::Classify => band.classify.as_deref().unwrap_or_default(),
+                };
+                s.write_all(bytes).map_err(|e| write_err(path, e))?;
+            }
+            Ok(())
+        };
+        let r = body(&mut sink)?;
+        for (s, &(path, _)) in streams.into_iter().zip(files) {
+            s.finish().map_err(|e| write_err(path, e))?;
+        }
+        r
+    };
+    for (w, &(path, _)) in writers.into_iter().zip(files) {
+        w.finish().map_err(|e| write_err(path, e))?;
+    }
+    Ok(result)
+}
