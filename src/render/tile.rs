@@ -44,8 +44,8 @@ pub(crate) struct TileOut {
     pub coverage: Vec<f64>,
     /// Samples taken per pixel.
     pub samples: Vec<u32>,
-    /// Ray parameter of the hit, +inf for none; kept compact: a full-size
-    /// render holds every tile at once.
+    /// Ray parameter of the hit, +inf for none (the in-memory render holds
+    /// every tile at once; the streaming one a row of tiles).
     pub depth: Vec<f64>,
     /// Normal image pixels, if asked for.
     pub normals: Option<Vec<Rgb<u8>>>,
