@@ -53,3 +53,27 @@ fn pruned_function_keeps_its_bits_at_a_box_corner() {
         );
     }
 }
+
+/// fuzz target `prune`: over a box where `min(0, y·-4)` always picks the
+/// constant 0, the rebuilt function held `max(0, -0)` where the whole one
+/// has `max(-0, min(…))`: the builder put the operands of `max` in its
+/// canonical order, and `max` of two zeros returns its second operand, so
+/// the pruned function gave -0 where the whole one gives 0. `min`/`max`
+/// are no longer reordered.
+#[test]
+fn pruning_keeps_the_sign_of_a_zero_from_max() {
+    use ibeam::eval::Evaluator;
+    use ibeam::eval::interp::Interpreter;
+    use ibeam::interval::Interval;
+    let f = ibeam::ir::passes::simplify(&random_function(18230306309293473662, 4));
+    let b = [
+        Interval::point(-3.0),
+        Interval::new(-0.31764705882352917, 0.6078431372549022),
+        Interval::point(-0.22352941176470598),
+    ];
+    let p = [-3.0, -0.31764705882352917, -0.22352941176470598];
+    let pruned = ibeam::ir::prune::prune(&f, b).expect("the min is decided");
+    let whole = Interpreter::new(f).point(p);
+    let v = Interpreter::new(pruned.function).point(p);
+    assert_eq!(v.to_bits(), whole.to_bits(), "{whole:e} vs {v:e}");
+}

@@ -122,12 +122,11 @@ pub enum BinaryOp {
 }
 
 impl BinaryOp {
-    /// Whether `op(a, b) == op(b, a)` for every pair, NaN included.
+    /// Whether `op(a, b)` and `op(b, a)` have the same bits for every pair
+    /// (NaN payloads aside). Not `min`/`max`: on a tie they return the
+    /// second operand, so `min(0, -0)` is `-0` and `min(-0, 0)` is `0`.
     pub fn is_commutative(self) -> bool {
-        matches!(
-            self,
-            BinaryOp::Add | BinaryOp::Mul | BinaryOp::Min | BinaryOp::Max
-        )
+        matches!(self, BinaryOp::Add | BinaryOp::Mul)
     }
 }
 
@@ -294,7 +293,9 @@ impl Function {
 /// (hash-consing, i.e. common-subexpression elimination at construction).
 ///
 /// Operands of commutative ops are put in a canonical order first, so
-/// `a + b` and `b + a` become one value.
+/// `a + b` and `b + a` become one value (not `min`/`max`, whose operand
+/// order decides the sign of a zero result, see
+/// [`BinaryOp::is_commutative`]).
 #[derive(Default, Debug, Clone)]
 pub struct Builder {
     ops: Vec<Op>,
