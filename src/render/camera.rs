@@ -191,12 +191,7 @@ impl RayCamera {
     /// as enclosures and as f64 midpoints.
     pub fn pixel_ray(&self, i: u32, j: u32) -> PixelRay {
         let (o, d) = self.ray_at(i as f64 + 0.5, j as f64 + 0.5);
-        PixelRay {
-            o,
-            d,
-            om: o.map(|c| c.mid()),
-            dm: d.map(|c| c.mid()),
-        }
+        PixelRay::new(o, d)
     }
 
     /// The rays through the centres of the `w × h` pixels from `(x0, y0)`,
@@ -229,13 +224,7 @@ impl RayCamera {
         let mut rays = Vec::with_capacity((w * h) as usize);
         for j in 0..h as usize {
             for i in 0..w as usize {
-                let (o, d) = (sum(&oc[i], &or[j]), sum(&dc[i], &dr[j]));
-                rays.push(PixelRay {
-                    o,
-                    d,
-                    om: o.map(|c| c.mid()),
-                    dm: d.map(|c| c.mid()),
-                });
+                rays.push(PixelRay::new(sum(&oc[i], &or[j]), sum(&dc[i], &dr[j])));
             }
         }
         rays
@@ -309,6 +298,17 @@ pub struct PixelRay {
 }
 
 impl PixelRay {
+    /// The ray with origin and direction enclosures `o` and `d`, and their
+    /// midpoints.
+    fn new(o: IBox, d: IBox) -> PixelRay {
+        PixelRay {
+            o,
+            d,
+            om: o.map(|c| c.mid()),
+            dm: d.map(|c| c.mid()),
+        }
+    }
+
     /// The f64 point at parameter t (for point evaluation and shading).
     pub fn at(&self, t: f64) -> [f64; 3] {
         (DVec3::from_array(self.om) + DVec3::from_array(self.dm) * t).to_array()

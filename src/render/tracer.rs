@@ -331,24 +331,12 @@ impl<'a> Tracer<'a> {
         if !self.prune || self.tapes.iter().all(Option::is_none) {
             return None;
         }
-        let mut any = false;
-        let mut live = self.live_ops.clone();
-        let mut evals = Vec::with_capacity(self.evals.len());
-        for (k, e) in self.evals.iter().enumerate() {
-            let pruned = self.tapes[k]
+        self.replace_evals(|k, e| {
+            self.tapes[k]
                 .is_some()
                 .then(|| self.prune_one(k, e, region, min_ops, st))
-                .flatten();
-            match pruned {
-                Some((p, n)) => {
-                    any = true;
-                    live[k] = n;
-                    evals.push(p);
-                }
-                None => evals.push(Arc::clone(e)),
-            }
-        }
-        any.then_some((evals, live))
+                .flatten()
+        })
     }
 
     // Object `k`'s evaluator `e` pruned to `region`, and its op count, if
@@ -411,22 +399,32 @@ impl<'a> Tracer<'a> {
         if !self.prune || !self.live_ops.iter().any(|&n| n >= PRUNE_MIN_OPS) {
             return None;
         }
+        self.replace_evals(|k, e| match &self.tapes[k] {
+            Some(tape) if self.live_ops[k] >= PRUNE_MIN_OPS && e.as_regional().is_none() => {
+                let beam = Beam { xs, ys, parent: e };
+                let tree = beam.node(self, tape, t, (e, tape.len()), SLICE_DEPTH, st)?;
+                let n = tree.pruned_tape().len();
+                Some((Arc::new(tree) as Arc<dyn Evaluator>, n))
+            }
+            _ => None,
+        })
+    }
+
+    // The evaluators with each one `replace` gives (and its op count) in
+    // place of the object's own; `None` when it replaces none.
+    fn replace_evals(
+        &self,
+        mut replace: impl FnMut(usize, &Arc<dyn Evaluator>) -> Option<(Arc<dyn Evaluator>, usize)>,
+    ) -> Option<PrunedEvals> {
         let mut any = false;
         let mut live = self.live_ops.clone();
         let mut evals = Vec::with_capacity(self.evals.len());
         for (k, e) in self.evals.iter().enumerate() {
-            let tree = match &self.tapes[k] {
-                Some(tape) if live[k] >= PRUNE_MIN_OPS && e.as_regional().is_none() => {
-                    let beam = Beam { xs, ys, parent: e };
-                    beam.node(self, tape, t, (e, tape.len()), SLICE_DEPTH, st)
-                }
-                _ => None,
-            };
-            match tree {
-                Some(tree) => {
+            match replace(k, e) {
+                Some((p, n)) => {
                     any = true;
-                    live[k] = tree.pruned_tape().len();
-                    evals.push(Arc::new(tree) as Arc<dyn Evaluator>);
+                    live[k] = n;
+                    evals.push(p);
                 }
                 None => evals.push(Arc::clone(e)),
             }
