@@ -364,20 +364,7 @@ fn all_start_inside(
     live: &[u32],
     st: &mut RenderStats,
 ) -> bool {
-    if tile.starts.is_empty() {
-        tile.starts = (tile.rays.iter().zip(&tile.slabs))
-            .map(|(r, s)| s.map(|(t0, _)| ray_box(r.o, r.d, Interval::point(t0))))
-            .collect();
-    }
-    let mut hull: Option<IBox> = None;
-    for j in b.y0..b.y1 {
-        for k in tile.idx(b.x0, j)..tile.idx(b.x1, j) {
-            if let Some(p) = tile.starts[k] {
-                hull = Some(hull.map_or(p, |h| box_hull(h, p)));
-            }
-        }
-    }
-    let Some(hull) = hull else {
+    let Some(hull) = start_hull(tr, tile, b) else {
         return false;
     };
     // The smallest object value must be negative: one object negative
@@ -422,6 +409,44 @@ fn all_start_inside(
         });
     }
     true
+}
+
+// A box holding every start point of the block's rays (each at its own
+// clip start); `None` when no ray meets the bounds. Where the starts lie
+// at nearly one depth (2D models, views along a face of the bounds), the
+// beam's hull over their depths, from its four corner rays; else the hull
+// of the pixels' own start boxes, computed once per tile, which is
+// tighter where the starts spread along the rays.
+fn start_hull(tr: &Tracer<'_>, tile: &mut TileRays, b: Rect) -> Option<IBox> {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for (i, j) in b.pixels() {
+        if let Some((t0, _)) = tile.slabs[tile.idx(i, j)] {
+            lo = lo.min(t0);
+            hi = hi.max(t0);
+        }
+    }
+    if lo > hi {
+        return None;
+    }
+    if hi - lo <= tr.cam.spacing(hi) {
+        let xs = ((b.x0 + tile.x0) as f64 + 0.5, (b.x1 + tile.x0) as f64 - 0.5);
+        let ys = ((b.y0 + tile.y0) as f64 + 0.5, (b.y1 + tile.y0) as f64 - 0.5);
+        return Some(tr.cam.corners(xs, ys).hull(Interval::new(lo, hi)));
+    }
+    if tile.starts.is_empty() {
+        tile.starts = (tile.rays.iter().zip(&tile.slabs))
+            .map(|(r, s)| s.map(|(t0, _)| ray_box(r.o, r.d, Interval::point(t0))))
+            .collect();
+    }
+    let mut hull: Option<IBox> = None;
+    for j in b.y0..b.y1 {
+        for k in tile.idx(b.x0, j)..tile.idx(b.x1, j) {
+            if let Some(p) = tile.starts[k] {
+                hull = Some(hull.map_or(p, |h| box_hull(h, p)));
+            }
+        }
+    }
+    hull
 }
 
 // Every ray of the block has its first root in [ta, tb]: refine per pixel.

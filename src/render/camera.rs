@@ -22,7 +22,7 @@ use crate::scene::{Bounds, Camera, Projection};
 const TOLERANCE_FLOOR: f64 = 1e-9;
 /// Relative widening of a ray's slab range, so that rounding in the slab
 /// test never clips off a point inside the bounds.
-const SLAB_PAD: f64 = 1e-9;
+pub(crate) const SLAB_PAD: f64 = 1e-9;
 
 /// Why a camera cannot produce rays.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -274,6 +274,13 @@ impl CornerRays {
             }
         }
         out
+    }
+
+    /// A sound hull of the block's ray origins (affine in screen position,
+    /// like the directions).
+    pub fn origins(&self) -> IBox {
+        let c = &self.0;
+        box_hull(box_hull(c[0].0, c[1].0), box_hull(c[2].0, c[3].0))
     }
 
     /// A sound hull of the block's ray directions: the hull of the corner

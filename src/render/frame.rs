@@ -179,6 +179,7 @@ impl<'a> Frame<'a> {
                 )
             });
             output_ms += written?;
+            self.release_groups_above(y0 + TILE);
             let t0 = Instant::now();
             pending = Some(band(&outs, &self.opts, y0, self.depth_range, &mut stats));
             output_ms += ms_since(t0);
@@ -192,6 +193,16 @@ impl<'a> Frame<'a> {
         stats.output_ms = output_ms;
         self.finish_times(&mut stats);
         Ok(stats)
+    }
+
+    // Drops the tracers' groups of tiles above output row `y` (see
+    // `super::groups`), which no later row of tiles reads.
+    fn release_groups_above(&self, y: u32) {
+        let s = self.aa.grid_factor();
+        self.tr.groups.release_above(y * s);
+        if let (Some(fine), Aa::Iaa { depth, .. }) = (&self.fine, self.aa) {
+            fine.groups.release_above(y << depth);
+        }
     }
 
     // Traces `tiles` in parallel, each with its anti-aliasing; the results

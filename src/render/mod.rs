@@ -35,6 +35,7 @@ pub mod aa;
 pub mod beam;
 pub mod camera;
 mod frame;
+mod groups;
 pub mod output;
 mod probe;
 pub mod ray;

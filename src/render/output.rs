@@ -7,8 +7,38 @@ use image::{ImageBuffer, Luma, Rgb, RgbImage};
 use super::camera::normalize;
 use crate::scene::{Bounds, Camera};
 
-/// Encodes one linear channel in [0, 1] as 8-bit sRGB.
+/// Encodes one linear channel in [0, 1] as 8-bit sRGB (NaN as 0, values
+/// outside clamped): the sRGB transfer function rounded to the nearest
+/// code, found among the 255 linear values where the code steps up (a
+/// binary search; the transfer function's `powf` costs more than the rest
+/// of shading a flat model's pixel).
 pub fn srgb_u8(c: f64) -> u8 {
+    static STEPS: std::sync::OnceLock<Vec<f64>> = std::sync::OnceLock::new();
+    let steps = STEPS.get_or_init(|| (1..=255).map(srgb_step).collect());
+    if c.is_nan() {
+        return 0;
+    }
+    steps.partition_point(|&s| s <= c) as u8
+}
+
+// The least linear value in [0, 1] that `srgb_u8_formula` encodes as at
+// least `code`: a bisection over the ordered bit patterns of the
+// non-negative doubles.
+fn srgb_step(code: u8) -> f64 {
+    let (mut lo, mut hi) = (0u64, 1f64.to_bits());
+    while lo < hi {
+        let mid = lo + (hi - lo) / 2;
+        if srgb_u8_formula(f64::from_bits(mid)) >= code {
+            hi = mid;
+        } else {
+            lo = mid + 1;
+        }
+    }
+    f64::from_bits(lo)
+}
+
+// The sRGB transfer function of a linear value, rounded to a code.
+fn srgb_u8_formula(c: f64) -> u8 {
     let c = if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) };
     let s = if c <= 0.003_130_8 {
         12.92 * c
@@ -103,6 +133,21 @@ mod tests {
         assert_eq!(srgb_u8(-1.0), 0);
         // Linear 0.214 is about sRGB 0.5.
         assert!((srgb_u8(0.214) as i32 - 128).abs() <= 1);
+    }
+
+    // The table gives the formula's code everywhere: at every step, a few
+    // ulps either side of it, and at a million spread values.
+    #[test]
+    fn srgb_table_matches_the_transfer_function() {
+        let mut probes = vec![f64::NAN, -0.0, 0.0, 1.0, 1.5, -3.0, f64::INFINITY];
+        for code in 1..=255u8 {
+            let s = srgb_step(code).to_bits();
+            probes.extend((s.saturating_sub(3)..s + 3).map(f64::from_bits));
+        }
+        probes.extend((0..1_000_000).map(|i| (f64::from(i) / 1e6).powi(2)));
+        for c in probes {
+            assert_eq!(srgb_u8(c), srgb_u8_formula(c), "at {c:e}");
+        }
     }
 
     #[test]

@@ -487,6 +487,7 @@ mod tests {
             tapes: vec![None],
             prune: false,
             flat: false,
+            groups: Default::default(),
         };
         let (o, d) = ([-2.0, 0.0, 0.0], [1.0, 0.0, 0.0]);
         let ray = PixelRay {

@@ -386,6 +386,7 @@ mod tests {
             tapes: vec![None],
             prune: false,
             flat: false,
+            groups: Default::default(),
         };
         let color = [0.8, 0.3, 0.2];
         let mut seed = 0x1234_5678_9abc_def0u64;

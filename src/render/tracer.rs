@@ -8,6 +8,7 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use super::camera::RayCamera;
+use super::groups::TileGroups;
 use super::stats::RenderStats;
 use crate::eval::regional::Regional;
 use crate::eval::tape::{Tape, Workspace};
@@ -67,6 +68,9 @@ pub(crate) struct Tracer<'a> {
     /// (2D models viewed along the missing axis): a block's T range then
     /// needs no bisection.
     pub flat: bool,
+    /// Evaluators pruned to groups of tiles, which tiles prune theirs
+    /// from (shared by the tracers of one camera).
+    pub groups: Arc<TileGroups>,
 }
 
 /// Whether the mean-value form still pays in one tile, per block size.
@@ -142,6 +146,7 @@ impl<'a> Tracer<'a> {
             tapes,
             prune,
             flat: constant_along_rays(&cam, scene),
+            groups: Arc::default(),
         }
     }
 
@@ -153,6 +158,7 @@ impl<'a> Tracer<'a> {
             colors: self.colors.clone(),
             live_ops: self.live_ops.clone(),
             tapes: self.tapes.clone(),
+            groups: Arc::default(),
             ..*self
         }
     }
@@ -172,6 +178,7 @@ impl<'a> Tracer<'a> {
             colors: self.colors.clone(),
             live_ops,
             tapes: self.tapes.clone(),
+            groups: Arc::clone(&self.groups),
             ..*self
         }
     }
@@ -399,10 +406,22 @@ impl<'a> Tracer<'a> {
         if !self.prune || !self.live_ops.iter().any(|&n| n >= PRUNE_MIN_OPS) {
             return None;
         }
+        // The tile prunes from its group's tapes when the group's region
+        // holds the tile's (a tape is exact only on its own region).
+        let pixel = (xs.0 as u32, ys.0 as u32);
+        let group = self.groups.of_pixel(self, pixel, st).filter(|(_, g)| {
+            self.beam_region(xs, ys, t)
+                .is_some_and(|r| box_within(&r, g))
+        });
         self.replace_evals(|k, e| match &self.tapes[k] {
             Some(tape) if self.live_ops[k] >= PRUNE_MIN_OPS && e.as_regional().is_none() => {
-                let beam = Beam { xs, ys, parent: e };
-                let tree = beam.node(self, tape, t, (e, tape.len()), SLICE_DEPTH, st)?;
+                let from = group.as_ref().map(|((evals, _), _)| &evals[k]);
+                let (parent, tape, above) = match from.and_then(|g| Some((g, g.as_regional()?))) {
+                    Some((g, r)) => (g, r.pruned_tape(), (r.answer(), r.answer_len())),
+                    None => (e, &**tape, (e, tape.len())),
+                };
+                let beam = Beam { xs, ys, parent };
+                let tree = beam.node(self, tape, t, above, SLICE_DEPTH, st)?;
                 let n = tree.pruned_tape().len();
                 Some((Arc::new(tree) as Arc<dyn Evaluator>, n))
             }
@@ -412,7 +431,7 @@ impl<'a> Tracer<'a> {
 
     // The evaluators with each one `replace` gives (and its op count) in
     // place of the object's own; `None` when it replaces none.
-    fn replace_evals(
+    pub(crate) fn replace_evals(
         &self,
         mut replace: impl FnMut(usize, &Arc<dyn Evaluator>) -> Option<(Arc<dyn Evaluator>, usize)>,
     ) -> Option<PrunedEvals> {
@@ -456,7 +475,7 @@ const SLICE_DEPTH: u32 = 6;
 const SLICE_ASPECT: f64 = 2.0;
 
 /// How much shorter a pruned tape must be than the one answering now.
-fn gain(answer: &dyn Evaluator) -> usize {
+pub(crate) fn gain(answer: &dyn Evaluator) -> usize {
     if answer.is_native() {
         PRUNE_GAIN_NATIVE
     } else {

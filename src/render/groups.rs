@@ -1,0 +1,232 @@
+//! Evaluators pruned to groups of tiles, shared by the tiles of a group.
+//!
+//! Every tile prunes its functions to its own beam (`Tracer::pruned_to_beam`).
+//! From the whole function that costs one interval pass over all of it per
+//! tile: for a model of thousands of ops, the largest single cost of a
+//! render (8 M ops pruned for prospero at 1024², 1024 tiles of 8k ops).
+//! So tiles prune from the tape of their group instead: a square of
+//! [`GROUP_TILES`]² tiles whose beam over the bounds is pruned once, the
+//! first time one of its tiles asks, by whichever thread asks first. The
+//! group's tape depends only on its region, so the images and counters do
+//! not depend on the thread count.
+//!
+//! A streamed render drops the groups above the rows it has finished, so
+//! memory holds one row of groups, not the image's.
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
+
+use super::TILE;
+use super::camera::SLAB_PAD;
+use super::tracer::{PrunedEvals, TileState, Tracer};
+use crate::eval::Evaluator;
+use crate::eval::regional::Regional;
+use crate::interval::Interval;
+use crate::interval::boxes::IBox;
+
+/// Tiles along each side of a group.
+pub(crate) const GROUP_TILES: u32 = 4;
+/// Side of a group in pixels.
+const GROUP_SIDE: u32 = GROUP_TILES * TILE;
+
+/// One group's pruned evaluators (`None`: nothing prunes there) and the
+/// region they are exact on.
+type Group = Option<(PrunedEvals, IBox)>;
+
+/// A group's slot, filled once by the first tile that asks.
+type Slot = Arc<OnceLock<Group>>;
+
+/// The groups of one camera's image, built as tiles ask for them.
+#[derive(Default)]
+pub(crate) struct TileGroups {
+    groups: Mutex<HashMap<(u32, u32), Slot>>,
+}
+
+impl TileGroups {
+    /// The evaluators of the group holding the pixel `(x, y)` and the
+    /// region they are exact on, built now if no tile has asked yet;
+    /// `None` when nothing prunes there.
+    pub(crate) fn of_pixel(
+        &self,
+        tr: &Tracer<'_>,
+        (x, y): (u32, u32),
+        st: &mut TileState,
+    ) -> Option<(PrunedEvals, IBox)> {
+        let key = (x / GROUP_SIDE, y / GROUP_SIDE);
+        let cell = {
+            let mut map = self.groups.lock().unwrap_or_else(|e| e.into_inner());
+            Arc::clone(map.entry(key).or_default())
+        };
+        // Built outside the map's lock: tiles of other groups go on.
+        cell.get_or_init(|| build(tr, key, st)).clone()
+    }
+
+    /// Drops the groups that lie wholly above image row `y`.
+    pub(crate) fn release_above(&self, y: u32) {
+        let mut map = self.groups.lock().unwrap_or_else(|e| e.into_inner());
+        map.retain(|&(_, gy), _| (gy + 1) * GROUP_SIDE > y);
+    }
+}
+
+// The group `(gx, gy)`'s evaluators: each large function pruned to the
+// group's beam over every ray parameter at which its rays can be inside
+// the bounds. A tape that does not shrink enough to answer (see
+// `Tracer::pruned_to_beam`) is kept to prune the tiles' from.
+fn build(tr: &Tracer<'_>, (gx, gy): (u32, u32), st: &mut TileState) -> Group {
+    let x0 = gx * GROUP_SIDE;
+    let y0 = gy * GROUP_SIDE;
+    let x1 = (x0 + GROUP_SIDE).min(tr.cam.width);
+    let y1 = (y0 + GROUP_SIDE).min(tr.cam.height);
+    let xs = (f64::from(x0) + 0.5, f64::from(x1) - 0.5);
+    let ys = (f64::from(y0) + 0.5, f64::from(y1) - 0.5);
+    let t = beam_range(tr, xs, ys)?;
+    let region = tr.beam_region(xs, ys, t)?;
+    let evals = tr.pruned_group(region, st)?;
+    Some((evals, region))
+}
+
+// An interval of the ray parameter holding every t at which a ray of the
+// beam through the pixel centres `xs × ys` is inside the bounds (each
+// pixel's clipped range, as `PixelRay::slab` computes it, lies inside
+// it, with a relative margin for that computation's rounding); `None`
+// when no ray of the beam meets the bounds, or no finite range holds them.
+fn beam_range(tr: &Tracer<'_>, xs: (f64, f64), ys: (f64, f64)) -> Option<Interval> {
+    let corners = tr.cam.corners(xs, ys);
+    let (o, d) = (corners.origins(), corners.directions());
+    let b = tr.bounds;
+    let mut t = Interval::new(0.0, f64::INFINITY);
+    for i in 0..3 {
+        // An axis along which some direction is zero bounds nothing.
+        if d[i].lo <= 0.0 && d[i].hi >= 0.0 {
+            continue;
+        }
+        let along = Interval::new(b.min[i], b.max[i]).sub(o[i]).div(d[i]);
+        t = Interval::new(t.lo.max(along.lo), t.hi.min(along.hi));
+    }
+    // `slab` pads each pixel's range by `SLAB_PAD` relative; twice that,
+    // plus the margin for its rounding.
+    let pad = |v: f64| 2.0 * SLAB_PAD * (1.0 + v.abs()) + 1e-9 * (t.hi - t.lo);
+    let t = Interval::new((t.lo - pad(t.lo)).max(0.0), t.hi + pad(t.hi));
+    (t.lo <= t.hi && t.hi.is_finite()).then_some(t)
+}
+
+/// Object evaluators pruned to a group's region.
+impl Tracer<'_> {
+    /// Each large function's tape pruned to `region`, answering there if
+    /// it shrank enough and otherwise keeping the tape only to prune from;
+    /// `None` when no tape prunes.
+    pub(crate) fn pruned_group(&self, region: IBox, st: &mut TileState) -> Option<PrunedEvals> {
+        if !self.prune {
+            return None;
+        }
+        self.replace_evals(|k, e| {
+            let tape = self.tapes[k].as_deref()?;
+            let own = tape.prune(region, &mut st.workspace)?.tape;
+            let n = own.len();
+            let node = if n * super::tracer::gain(e.as_ref()) <= tape.len() {
+                st.stats.pruned_ops_before += tape.len() as u64;
+                st.stats.pruned_ops_after += n as u64;
+                Regional::new(region, own, Arc::clone(e))
+            } else {
+                Regional::delegating(region, own, (Arc::clone(e), tape.len()), Arc::clone(e))
+            };
+            Some((Arc::new(node) as Arc<dyn Evaluator>, n))
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::camera::RayCamera;
+    use crate::scene::{Bounds, Camera, Projection};
+
+    fn tracer(camera: &Camera, size: u32) -> Tracer<'static> {
+        Tracer {
+            cam: RayCamera::new(camera, size, size).unwrap(),
+            evals: &[],
+            colors: vec![],
+            lights: &[],
+            bounds: Bounds {
+                min: [-1.0, -0.5, -2.0],
+                max: [1.5, 1.0, 0.25],
+            },
+            diag: 4.0,
+            live_ops: vec![],
+            tapes: vec![],
+            prune: true,
+            flat: false,
+            groups: Default::default(),
+        }
+    }
+
+    // Every pixel's clipped range lies in its group's range, and every
+    // tile's beam region in its group's region, for views from outside,
+    // from inside and at a slant, in perspective and parallel: otherwise
+    // tiles could not prune from their group.
+    #[test]
+    fn a_group_holds_the_ranges_and_regions_of_its_pixels_and_tiles() {
+        let views = [
+            ([0.3, 0.2, 5.0], Projection::Perspective { fov_deg: 50.0 }),
+            ([0.1, 0.1, -0.5], Projection::Perspective { fov_deg: 120.0 }),
+            ([4.0, 3.0, 2.0], Projection::Orthographic { width: 4.0 }),
+            ([0.0, 0.0, 3.0], Projection::Orthographic { width: 2.0 }),
+        ];
+        let size = 2 * GROUP_SIDE + 40;
+        for (eye, projection) in views {
+            let camera = Camera {
+                eye,
+                target: [0.2, 0.1, -0.3],
+                up: [0.0, 1.0, 0.0],
+                projection,
+            };
+            let tr = tracer(&camera, size);
+            let mut groups_met = 0;
+            for gy in 0..size.div_ceil(GROUP_SIDE) {
+                for gx in 0..size.div_ceil(GROUP_SIDE) {
+                    let (x0, y0) = (gx * GROUP_SIDE, gy * GROUP_SIDE);
+                    let (x1, y1) = ((x0 + GROUP_SIDE).min(size), (y0 + GROUP_SIDE).min(size));
+                    let centres = |a: u32, b: u32| (f64::from(a) + 0.5, f64::from(b) - 0.5);
+                    let range = beam_range(&tr, centres(x0, x1), centres(y0, y1));
+                    let rays = tr.cam.pixel_rays((x0, y0), (x1 - x0, y1 - y0));
+                    let slabs: Vec<_> = rays.iter().filter_map(|r| r.slab(&tr.bounds)).collect();
+                    let Some(t) = range else {
+                        assert!(slabs.is_empty(), "a group whose rays meet the bounds");
+                        continue;
+                    };
+                    groups_met += 1;
+                    for (a, b) in slabs {
+                        assert!(t.lo <= a && b <= t.hi, "[{a}, {b}] outside {t:?}");
+                    }
+                    let region = tr.beam_region(centres(x0, x1), centres(y0, y1), t).unwrap();
+                    for ty in (y0..y1).step_by(TILE as usize) {
+                        for tx in (x0..x1).step_by(TILE as usize) {
+                            let (tx1, ty1) = ((tx + TILE).min(x1), (ty + TILE).min(y1));
+                            let rays = tr.cam.pixel_rays((tx, ty), (tx1 - tx, ty1 - ty));
+                            let (mut a, mut b) = (f64::INFINITY, f64::NEG_INFINITY);
+                            for (s0, s1) in rays.iter().filter_map(|r| r.slab(&tr.bounds)) {
+                                a = a.min(s0);
+                                b = b.max(s1);
+                            }
+                            if a > b {
+                                continue;
+                            }
+                            let tile = tr
+                                .beam_region(
+                                    centres(tx, tx1),
+                                    centres(ty, ty1),
+                                    Interval::new(a, b),
+                                )
+                                .unwrap();
+                            assert!(
+                                crate::interval::boxes::box_within(&tile, &region),
+                                "tile ({tx}, {ty}) sticks out of its group"
+                            );
+                        }
+                    }
+                }
+            }
+            assert!(groups_met > 0);
+        }
+    }
+}
