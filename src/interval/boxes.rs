@@ -9,12 +9,19 @@ pub type IBox = [Interval; 3];
 
 /// The point interval of each coordinate.
 pub fn point_box(p: [f64; 3]) -> IBox {
-    p.map(Interval::point)
+    [
+        Interval::point(p[0]),
+        Interval::point(p[1]),
+        Interval::point(p[2]),
+    ]
 }
 
 /// The smallest box holding both boxes.
+// Written out per axis rather than with `array::from_fn`, whose closure
+// calls the optimiser did not inline in these per-pixel helpers.
 pub fn box_hull(a: IBox, b: IBox) -> IBox {
-    std::array::from_fn(|i| Interval::new(a[i].lo.min(b[i].lo), a[i].hi.max(b[i].hi)))
+    let hull = |i: usize| Interval::new(a[i].lo.min(b[i].lo), a[i].hi.max(b[i].hi));
+    [hull(0), hull(1), hull(2)]
 }
 
 /// Whether `inner` lies in `outer` (false where a bound is NaN).
@@ -38,7 +45,11 @@ pub fn box_meet(a: IBox, b: IBox) -> Option<IBox> {
 
 /// `o + t·d` for interval operands.
 pub fn ray_box(o: IBox, d: IBox, t: Interval) -> IBox {
-    std::array::from_fn(|i| o[i].add(t.mul(d[i])))
+    [
+        o[0].add(t.mul(d[0])),
+        o[1].add(t.mul(d[1])),
+        o[2].add(t.mul(d[2])),
+    ]
 }
 
 /// An interval containing `a · b` for every pair of vectors in the boxes

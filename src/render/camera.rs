@@ -175,11 +175,12 @@ impl RayCamera {
     pub fn ray_at(&self, x: f64, y: f64) -> (IBox, IBox) {
         let (xi, yi) = (Interval::point(x), Interval::point(y));
         let aff = |c: DVec3, cx: DVec3, cy: DVec3| -> IBox {
-            std::array::from_fn(|i| {
+            let axis = |i: usize| {
                 Interval::point(c[i])
                     .add(xi.mul(Interval::point(cx[i])))
                     .add(yi.mul(Interval::point(cy[i])))
-            })
+            };
+            [axis(0), axis(1), axis(2)]
         };
         (
             aff(self.o0, self.ox, self.oy),
@@ -311,8 +312,8 @@ impl PixelRay {
         PixelRay {
             o,
             d,
-            om: o.map(|c| c.mid()),
-            dm: d.map(|c| c.mid()),
+            om: [o[0].mid(), o[1].mid(), o[2].mid()],
+            dm: [d[0].mid(), d[1].mid(), d[2].mid()],
         }
     }
 

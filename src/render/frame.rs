@@ -347,13 +347,14 @@ fn band(
         normals: opts.want_normals.then(|| vec![0; 3 * n]),
         classify: opts.want_classify.then(|| vec![0; 3 * n]),
     };
+    let mut srgb = output::SrgbRun::default();
     for t in outs {
         stats.merge(&t.state.stats);
         for j in 0..t.h {
             for i in 0..t.w {
                 let src = (j * t.w + i) as usize;
                 let dst = (j as usize) * w + (t.x0 + i) as usize;
-                b.color[3 * dst..3 * dst + 3].copy_from_slice(&output::srgb_pixel(t.linear[src]).0);
+                b.color[3 * dst..3 * dst + 3].copy_from_slice(&srgb.pixel(t.linear[src]).0);
                 stats.pixels_hit += u64::from(t.depth[src].is_finite());
                 if let Some(d) = b.depth.as_mut() {
                     d[dst] = output::depth_u16(t.depth[src], depth_range);
@@ -394,13 +395,14 @@ fn assemble(
     let mut depth_t = vec![f64::INFINITY; npx];
     let mut normals = opts.want_normals.then(|| vec![Rgb([0u8; 3]); npx]);
     let mut class = opts.want_classify.then(|| vec![Rgb([0u8; 3]); npx]);
+    let mut srgb = output::SrgbRun::default();
     for t in outs {
         stats.merge(&t.state.stats);
         for j in 0..t.h {
             for i in 0..t.w {
                 let src = (j * t.w + i) as usize;
                 let dst = ((t.y0 + j) as usize) * (w as usize) + (t.x0 + i) as usize;
-                color[dst] = output::srgb_pixel(t.linear[src]);
+                color[dst] = srgb.pixel(t.linear[src]);
                 linear[dst] = t.linear[src];
                 coverage[dst] = t.coverage[src];
                 samples[dst] = t.samples[src];

@@ -53,6 +53,28 @@ pub fn srgb_pixel(c: [f64; 3]) -> Rgb<u8> {
     Rgb([srgb_u8(c[0]), srgb_u8(c[1]), srgb_u8(c[2])])
 }
 
+/// [`srgb_pixel`] that remembers the last colour it encoded: runs of one
+/// colour (background, flat 2D masks) are encoded once.
+#[derive(Clone, Debug, Default)]
+pub struct SrgbRun {
+    last: Option<([u64; 3], Rgb<u8>)>,
+}
+
+impl SrgbRun {
+    /// The 8-bit sRGB pixel of linear `c`.
+    pub fn pixel(&mut self, c: [f64; 3]) -> Rgb<u8> {
+        let key = c.map(f64::to_bits);
+        match self.last {
+            Some((k, p)) if k == key => p,
+            _ => {
+                let p = srgb_pixel(c);
+                self.last = Some((key, p));
+                p
+            }
+        }
+    }
+}
+
 /// The range of ray parameters a hit can have: the camera's t over the
 /// scene bounds, `(near, far)`, which the depth image maps to 0..=65534.
 ///

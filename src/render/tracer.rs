@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use super::camera::RayCamera;
+use super::camera::{CornerRays, RayCamera};
 use super::groups::TileGroups;
 use super::stats::RenderStats;
 use crate::eval::regional::Regional;
@@ -315,6 +315,11 @@ impl<'a> Tracer<'a> {
         padded(self.cam.corners(xs, ys).hull(t))
     }
 
+    /// [`Tracer::beam_region`] of a beam whose corner rays are known.
+    pub(crate) fn corner_region(&self, corners: &CornerRays, t: Interval) -> Option<IBox> {
+        padded(corners.hull(t))
+    }
+
     /// The scene's evaluators with every function that shrinks enough
     /// pruned to `region` (see [`crate::eval::tape`]), and their live op
     /// counts; `None` when none does. Each is pruned from the nearest
@@ -420,7 +425,13 @@ impl<'a> Tracer<'a> {
                     Some((g, r)) => (g, r.pruned_tape(), (r.answer(), r.answer_len())),
                     None => (e, &**tape, (e, tape.len())),
                 };
-                let beam = Beam { xs, ys, parent };
+                let corners = self.cam.corners(xs, ys);
+                let beam = Beam {
+                    xs,
+                    ys,
+                    corners,
+                    parent,
+                };
                 let tree = beam.node(self, tape, t, above, SLICE_DEPTH, st)?;
                 let n = tree.pruned_tape().len();
                 Some((Arc::new(tree) as Arc<dyn Evaluator>, n))
@@ -487,6 +498,7 @@ pub(crate) fn gain(answer: &dyn Evaluator) -> usize {
 struct Beam<'e> {
     xs: (f64, f64),
     ys: (f64, f64),
+    corners: CornerRays,
     parent: &'e Arc<dyn Evaluator>,
 }
 
@@ -504,7 +516,7 @@ impl Beam<'_> {
         depth: u32,
         st: &mut TileState,
     ) -> Option<Regional> {
-        let region = tr.beam_region(self.xs, self.ys, t)?;
+        let region = tr.corner_region(&self.corners, t)?;
         let own = tape.prune(region, &mut st.workspace).map(|p| p.tape);
         let own = own.unwrap_or_else(|| tape.clone());
         let answers = own.len() * gain(above.0.as_ref()) <= above.1;
