@@ -13,12 +13,46 @@ use crate::scene::{Bounds, Camera};
 /// binary search; the transfer function's `powf` costs more than the rest
 /// of shading a flat model's pixel).
 pub fn srgb_u8(c: f64) -> u8 {
-    static STEPS: std::sync::OnceLock<Vec<f64>> = std::sync::OnceLock::new();
-    let steps = STEPS.get_or_init(|| (1..=255).map(srgb_step).collect());
-    if c.is_nan() {
+    static TABLE: std::sync::OnceLock<SrgbTable> = std::sync::OnceLock::new();
+    let t = TABLE.get_or_init(SrgbTable::new);
+    if c.is_nan() || c <= 0.0 {
         return 0;
     }
-    steps.partition_point(|&s| s <= c) as u8
+    if c >= 1.0 {
+        return 255;
+    }
+    // `c · BINS` is exact (a power of two), so `c` is at least the start
+    // of its bin, whose code the table holds; the steps inside the bin
+    // (at most two) are then counted one by one.
+    let mut code = t.bins[(c * SRGB_BINS as f64) as usize];
+    while code < 255 && t.steps[code as usize] <= c {
+        code += 1;
+    }
+    code
+}
+
+/// Bins of [0, 1] in the sRGB table (a power of two).
+const SRGB_BINS: usize = 4096;
+
+// The linear values where the sRGB code steps up (`steps[k]` is the least
+// value of code k + 1), and the code at the start of each of `SRGB_BINS`
+// equal bins of [0, 1].
+struct SrgbTable {
+    steps: Vec<f64>,
+    bins: Vec<u8>,
+}
+
+impl SrgbTable {
+    fn new() -> SrgbTable {
+        let steps: Vec<f64> = (1..=255).map(srgb_step).collect();
+        let bins = (0..SRGB_BINS)
+            .map(|i| {
+                let start = i as f64 / SRGB_BINS as f64;
+                steps.partition_point(|&s| s <= start) as u8
+            })
+            .collect();
+        SrgbTable { steps, bins }
+    }
 }
 
 // The least linear value in [0, 1] that `srgb_u8_formula` encodes as at
