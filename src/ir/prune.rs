@@ -57,7 +57,19 @@ pub struct Facts {
 /// the rules, shared by [`prune`] and the tapes' pruning.
 pub fn facts(op: &Op, value: Interval, arg: impl Fn(ValueId) -> (Interval, Facts)) -> Facts {
     let finite = |i: Interval| i.lo.is_finite() && i.hi.is_finite();
-    let args_defined = op.operands().all(|a| arg(a).1.defined);
+    // By arity rather than over `op.operands()`: this runs for every op of
+    // every pruning, and the iterator chain did not compile away.
+    let (args_defined, args_contained) = match *op {
+        Op::Var(_) | Op::Const(_) => (true, true),
+        Op::Unary(_, a) | Op::Powi(a, _) => {
+            let f = arg(a).1;
+            (f.defined, f.contained)
+        }
+        Op::Binary(_, a, b) => {
+            let (fa, fb) = (arg(a).1, arg(b).1);
+            (fa.defined && fb.defined, fa.contained && fb.contained)
+        }
+    };
     let nonneg = match *op {
         Op::Const(c) => c >= 0.0,
         Op::Unary(UnaryOp::Square | UnaryOp::Abs | UnaryOp::Sqrt | UnaryOp::Exp, _) => true,
@@ -87,7 +99,7 @@ pub fn facts(op: &Op, value: Interval, arg: impl Fn(ValueId) -> (Interval, Facts
     Facts {
         defined: args_defined && domain && finite(value),
         nonneg,
-        contained: !signed_zero_pole && op.operands().all(|a| arg(a).1.contained),
+        contained: !signed_zero_pole && args_contained,
     }
 }
 
