@@ -23,7 +23,7 @@ pub enum EvalKind {
 /// An evaluator of `kind` for an already simplified function.
 pub fn build_evaluator(f: &Function, kind: EvalKind) -> Result<Arc<dyn Evaluator>, JitError> {
     Ok(match kind {
-        EvalKind::Jit => Arc::new(JitEvaluator::new(f)?),
+        EvalKind::Jit => Arc::new(JitEvaluator::new(f)?.in_background()),
         EvalKind::Interp => Arc::new(Interpreter::new(f.clone())),
     })
 }

@@ -84,6 +84,12 @@ pub trait Evaluator: Send + Sync {
         std::time::Duration::ZERO
     }
 
+    /// The part of [`Evaluator::compile_time`] its callers waited for
+    /// (compiled on their threads, not in the background).
+    fn compile_wait(&self) -> std::time::Duration {
+        self.compile_time()
+    }
+
     /// `out[i] = f(xs[i], ys[i], zs[i])` for every i.
     fn point_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
         for (i, o) in out.iter_mut().enumerate() {

@@ -54,7 +54,8 @@ pub struct Frame<'a> {
     bg: [f64; 3],
     depth_range: (f64, f64),
     start: Instant,
-    compiled_before: f64,
+    // Compile time (total, waited for) before the render, ms.
+    compiled_before: (f64, f64),
 }
 
 /// Finished image rows `y0..y0 + rows`, each `width` pixels, row-major;
@@ -242,22 +243,23 @@ impl<'a> Frame<'a> {
     }
 
     // Sets the render-wide times: native code compiles lazily, on an
-    // evaluator kind's first use during the render; that time is reported
-    // as compilation, not rendering.
+    // evaluator kind's first use during the render, on the render's
+    // threads or in the background. All of it is reported as compilation;
+    // what the render waited for is not counted as rendering.
     fn finish_times(&self, stats: &mut RenderStats) {
-        let lazy_compile_ms = compile_ms(self.evaluators) - self.compiled_before;
-        stats.compile_ms += lazy_compile_ms;
-        stats.time_ms = ms_since(self.start) - lazy_compile_ms;
+        let (compiled, waited) = compile_ms(self.evaluators);
+        stats.compile_ms += compiled - self.compiled_before.0;
+        stats.time_ms = ms_since(self.start) - (waited - self.compiled_before.1);
     }
 }
 
-// Time the evaluators have spent compiling native code so far, ms.
-fn compile_ms(evals: &[Arc<dyn Evaluator>]) -> f64 {
-    evals
-        .iter()
-        .map(|e| e.compile_time().as_secs_f64())
-        .sum::<f64>()
-        * 1e3
+// Time the evaluators have spent compiling native code so far, and the
+// part of it their callers waited for (not compiled in the background), ms.
+fn compile_ms(evals: &[Arc<dyn Evaluator>]) -> (f64, f64) {
+    let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
+    let total = evals.iter().map(|e| ms(e.compile_time())).sum();
+    let waited = evals.iter().map(|e| ms(e.compile_wait())).sum();
+    (total, waited)
 }
 
 // Refuses options, scenes and evaluators that cannot be rendered.

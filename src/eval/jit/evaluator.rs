@@ -1,11 +1,13 @@
 //! [`JitEvaluator`]: the evaluator kinds of one function, each compiled on
 //! first use into a table keyed by [`Kind`].
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, OnceLock};
 use std::time::{Duration, Instant};
 
 use super::raw::{Code, IntervalBatchFn, IntervalFn, PointBatchFn, PointFn, PointGradFn};
 use super::{JitError, Kind, compile, lower};
+use crate::eval::interp::Interpreter;
 use crate::eval::{Evaluator, Grad, IntervalGrad};
 use crate::interval::Interval;
 use crate::ir::Function;
@@ -38,11 +40,46 @@ impl Entry {
     }
 }
 
-/// A lazily compiled kind and how long its compilation took.
+/// A lazily compiled kind, how long its compilation took, and whether a
+/// caller waited for it (compiled on the calling thread).
 struct Slot {
     code: Result<Entry, JitError>,
     time: Duration,
+    waited: bool,
 }
+
+/// The evaluator's shared state: background compilations hold it too.
+struct Inner {
+    f: Arc<Function>,
+    live: Arc<[bool]>,
+    slots: [OnceLock<Slot>; Kind::ALL.len()],
+    // Whether a background compilation of each kind has been started.
+    started: [AtomicBool; Kind::ALL.len()],
+    // Answers for the kinds still compiling in the background.
+    interp: OnceLock<Interpreter>,
+}
+
+impl Inner {
+    /// The slot of `kind`, compiled now if it was not yet.
+    fn slot(&self, kind: Kind, waited: bool) -> &Slot {
+        self.slots[kind as usize].get_or_init(|| {
+            let t = Instant::now();
+            let code = Entry::compile(kind, &self.f, &self.live);
+            Slot {
+                code,
+                time: t.elapsed(),
+                waited,
+            }
+        })
+    }
+}
+
+/// Functions with more live ops than this never compile their derivative
+/// kinds: those are not bit for bit the interpreter's (rounding order in
+/// the chain rules), so they cannot be swapped in once compiled, and
+/// compiling them for a function this long would stop a render for
+/// seconds. The interpreter answers them.
+pub const DERIVATIVES_MAX_OPS: usize = 4096;
 
 /// Native evaluators of one function, each kind compiled on first use.
 ///
@@ -50,10 +87,24 @@ struct Slot {
 /// validated in [`JitEvaluator::new`]), that kind answers with NaN points and
 /// whole-line intervals, which are sound; [`JitEvaluator::compile_all`]
 /// reports the error.
+///
+/// By default a kind compiles on the calling thread at its first use.
+/// [`JitEvaluator::in_background`] makes the kinds whose answers are the
+/// interpreter's bit for bit (point, interval and their batches) compile
+/// on a thread of their own instead, the interpreter answering until the
+/// code is ready: a render never waits for them, and its pixels do not
+/// depend on when the code arrives.
 pub struct JitEvaluator {
-    f: Arc<Function>,
-    live: Arc<[bool]>,
-    slots: [OnceLock<Slot>; Kind::ALL.len()],
+    inner: Arc<Inner>,
+    background: bool,
+}
+
+/// What answers one call: native code, or the interpreter while it
+/// compiles (or instead of it).
+enum Answer<'a> {
+    Native(&'a Entry),
+    Interpreted(&'a Interpreter),
+    Failed,
 }
 
 impl JitEvaluator {
@@ -62,45 +113,93 @@ impl JitEvaluator {
         crate::ir::validate::validate(f).map_err(|e| JitError::new("invalid IR", e))?;
         super::isa()?;
         Ok(JitEvaluator {
-            live: lower::live_ops(f).into(),
-            f: Arc::new(f.clone()),
-            slots: std::array::from_fn(|_| OnceLock::new()),
+            inner: Arc::new(Inner {
+                live: lower::live_ops(f).into(),
+                f: Arc::new(f.clone()),
+                slots: std::array::from_fn(|_| OnceLock::new()),
+                started: std::array::from_fn(|_| AtomicBool::new(false)),
+                interp: OnceLock::new(),
+            }),
+            background: false,
         })
+    }
+
+    /// The same evaluator, compiling in the background (see the type's
+    /// doc); functions over [`DERIVATIVES_MAX_OPS`] live ops also leave
+    /// their derivative kinds to the interpreter.
+    pub fn in_background(mut self) -> JitEvaluator {
+        self.background = true;
+        self
     }
 
     /// The function being evaluated.
     pub fn function(&self) -> &Function {
-        &self.f
+        &self.inner.f
     }
 
-    /// The slot of `kind`, compiled now if it was not yet.
-    fn slot(&self, kind: Kind) -> &Slot {
-        self.slots[kind as usize].get_or_init(|| {
-            let t = Instant::now();
-            let code = Entry::compile(kind, &self.f, &self.live);
-            Slot {
-                code,
-                time: t.elapsed(),
-            }
-        })
-    }
-
-    /// The code of `kind`, or None if Cranelift rejected it.
+    /// The code of `kind`, compiled now if it was not yet, or None if
+    /// Cranelift rejected it.
     fn entry(&self, kind: Kind) -> Option<&Entry> {
-        self.slot(kind).code.as_ref().ok()
+        self.inner.slot(kind, true).code.as_ref().ok()
+    }
+
+    /// What answers `kind` now: its code if compiled; in the background
+    /// mode, the interpreter while a kind exact to its bits compiles, and
+    /// always for the derivative kinds of a long function.
+    fn answer(&self, kind: Kind) -> Answer<'_> {
+        if !self.background {
+            return self.entry(kind).map_or(Answer::Failed, Answer::Native);
+        }
+        let exact = matches!(
+            kind,
+            Kind::Point | Kind::Interval | Kind::PointBatch | Kind::IntervalBatch
+        );
+        if !exact {
+            let long = self.inner.live.iter().filter(|&&l| l).count() > DERIVATIVES_MAX_OPS;
+            if long {
+                return Answer::Interpreted(self.interpreter());
+            }
+            return self.entry(kind).map_or(Answer::Failed, Answer::Native);
+        }
+        if let Some(slot) = self.inner.slots[kind as usize].get() {
+            return slot.code.as_ref().map_or(Answer::Failed, Answer::Native);
+        }
+        if !self.inner.started[kind as usize].swap(true, Ordering::AcqRel) {
+            let inner = Arc::clone(&self.inner);
+            let spawned = std::thread::Builder::new()
+                .name(format!("ibeam-jit-{}", kind.name()))
+                .spawn(move || {
+                    inner.slot(kind, false);
+                });
+            if spawned.is_err() {
+                // No thread to compile on: compile here, as without the mode.
+                return self.entry(kind).map_or(Answer::Failed, Answer::Native);
+            }
+        }
+        Answer::Interpreted(self.interpreter())
+    }
+
+    fn interpreter(&self) -> &Interpreter {
+        self.inner
+            .interp
+            .get_or_init(|| Interpreter::new((*self.inner.f).clone()))
     }
 
     /// The kinds compiled so far and how long each took to compile.
     pub fn compile_times(&self) -> Vec<(&'static str, Duration)> {
         Kind::ALL
             .into_iter()
-            .filter_map(|k| self.slots[k as usize].get().map(|s| (k.name(), s.time)))
+            .filter_map(|k| {
+                self.inner.slots[k as usize]
+                    .get()
+                    .map(|s| (k.name(), s.time))
+            })
             .collect()
     }
 
     /// Compiles the given kind now (if not yet done).
     pub fn compile(&self, kind: Kind) -> Result<(), JitError> {
-        match &self.slot(kind).code {
+        match &self.inner.slot(kind, true).code {
             Err(e) => Err(e.clone()),
             Ok(_) => Ok(()),
         }
@@ -118,21 +217,23 @@ impl JitEvaluator {
 
 impl Evaluator for JitEvaluator {
     fn point(&self, p: [f64; 3]) -> f64 {
-        match self.entry(Kind::Point) {
-            Some(Entry::Point(c)) => c.call(p),
+        match self.answer(Kind::Point) {
+            Answer::Native(Entry::Point(c)) => c.call(p),
+            Answer::Interpreted(i) => i.point(p),
             _ => f64::NAN,
         }
     }
 
     fn point_grad(&self, p: [f64; 3]) -> Grad {
-        match self.entry(Kind::PointGrad) {
-            Some(Entry::PointGrad(c)) => {
+        match self.answer(Kind::PointGrad) {
+            Answer::Native(Entry::PointGrad(c)) => {
                 let r = c.call(p);
                 Grad {
                     v: r[0],
                     d: [r[1], r[2], r[3]],
                 }
             }
+            Answer::Interpreted(i) => i.point_grad(p),
             _ => Grad {
                 v: f64::NAN,
                 d: [f64::NAN; 3],
@@ -141,15 +242,17 @@ impl Evaluator for JitEvaluator {
     }
 
     fn interval(&self, b: [Interval; 3]) -> Interval {
-        match self.entry(Kind::Interval) {
-            Some(Entry::Interval(c)) => c.call_interval(&b),
+        match self.answer(Kind::Interval) {
+            Answer::Native(Entry::Interval(c)) => c.call_interval(&b),
+            Answer::Interpreted(i) => i.interval(b),
             _ => Interval::ENTIRE,
         }
     }
 
     fn interval_grad(&self, b: [Interval; 3]) -> IntervalGrad {
-        match self.entry(Kind::IntervalGrad) {
-            Some(Entry::IntervalGrad(c)) => c.call_interval_grad(&b),
+        match self.answer(Kind::IntervalGrad) {
+            Answer::Native(Entry::IntervalGrad(c)) => c.call_interval_grad(&b),
+            Answer::Interpreted(i) => i.interval_grad(b),
             _ => IntervalGrad {
                 v: Interval::ENTIRE,
                 d: [Interval::ENTIRE; 3],
@@ -158,16 +261,17 @@ impl Evaluator for JitEvaluator {
     }
 
     fn interval_dir(&self, b: [Interval; 3], v: [Interval; 3]) -> [Interval; 2] {
-        match self.entry(Kind::IntervalDir) {
-            Some(Entry::IntervalDir(c)) => {
+        match self.answer(Kind::IntervalDir) {
+            Answer::Native(Entry::IntervalDir(c)) => {
                 c.call_interval_dir(&[b[0], b[1], b[2], v[0], v[1], v[2]])
             }
+            Answer::Interpreted(i) => i.interval_dir(b, v),
             _ => [Interval::ENTIRE; 2],
         }
     }
 
     fn function(&self) -> Option<&Function> {
-        Some(&self.f)
+        Some(&self.inner.f)
     }
 
     fn is_native(&self) -> bool {
@@ -178,19 +282,103 @@ impl Evaluator for JitEvaluator {
         self.compile_times().iter().map(|(_, t)| *t).sum()
     }
 
+    fn compile_wait(&self) -> Duration {
+        Kind::ALL
+            .into_iter()
+            .filter_map(|k| self.inner.slots[k as usize].get())
+            .filter(|s| s.waited)
+            .map(|s| s.time)
+            .sum()
+    }
+
     /// Evaluates `min(len)` points of the four slices in one native loop.
     fn point_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
-        match self.entry(Kind::PointBatch) {
-            Some(Entry::PointBatch(c)) => c.call(xs, ys, zs, out),
+        match self.answer(Kind::PointBatch) {
+            Answer::Native(Entry::PointBatch(c)) => c.call(xs, ys, zs, out),
+            Answer::Interpreted(i) => i.point_batch(xs, ys, zs, out),
             _ => out.fill(f64::NAN),
         }
     }
 
     /// Evaluates `min(len)` boxes in one native loop.
     fn interval_batch(&self, boxes: &[[Interval; 3]], out: &mut [Interval]) {
-        match self.entry(Kind::IntervalBatch) {
-            Some(Entry::IntervalBatch(c)) => c.call(boxes, out),
+        match self.answer(Kind::IntervalBatch) {
+            Answer::Native(Entry::IntervalBatch(c)) => c.call(boxes, out),
+            Answer::Interpreted(i) => i.interval_batch(boxes, out),
             _ => out.fill(Interval::ENTIRE),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ir::random::{Rng, random_function};
+
+    fn same(a: f64, b: f64) -> bool {
+        a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
+    }
+
+    // Whatever answers (the interpreter while the code compiles, the code
+    // once it is there), the bits are the interpreter's; the compilation
+    // is reported, and nobody waited for it.
+    #[test]
+    fn background_answers_keep_the_interpreters_bits_across_compilation() {
+        let mut rng = Rng::new(5);
+        for seed in 0..12 {
+            let f = random_function(seed, 8);
+            let bg = JitEvaluator::new(&f).unwrap().in_background();
+            let reference = Interpreter::new(f.clone());
+            let check = |rng: &mut Rng| {
+                for _ in 0..50 {
+                    let p = [
+                        rng.range(-2.0, 2.0),
+                        rng.range(-2.0, 2.0),
+                        rng.range(-2.0, 2.0),
+                    ];
+                    assert!(
+                        same(bg.point(p), reference.point(p)),
+                        "seed {seed} at {p:?}"
+                    );
+                    let b = p.map(|c| Interval::new(c - 0.25, c + 0.25));
+                    let (got, want) = (bg.interval(b), reference.interval(b));
+                    assert!(
+                        (got.is_empty() && want.is_empty())
+                            || (same(got.lo, want.lo) && same(got.hi, want.hi)),
+                        "seed {seed} over {b:?}: {got:?} against {want:?}"
+                    );
+                }
+            };
+            check(&mut rng);
+            let start = Instant::now();
+            while bg.compile_times().len() < 2 {
+                assert!(start.elapsed() < Duration::from_secs(60), "never compiled");
+                std::thread::sleep(Duration::from_millis(2));
+            }
+            check(&mut rng);
+            assert!(bg.compile_time() > Duration::ZERO);
+            assert_eq!(bg.compile_wait(), Duration::ZERO);
+        }
+    }
+
+    // A long function leaves its derivative kinds to the interpreter in the
+    // background mode: the same bits as the interpreter, nothing compiled.
+    #[test]
+    fn long_functions_interpret_their_derivatives_in_the_background_mode() {
+        let mut b = crate::ir::Builder::new();
+        let x = b.var(crate::ir::Var::X);
+        let mut acc = x;
+        for k in 0..DERIVATIVES_MAX_OPS {
+            let c = b.constant(1.0 + k as f64 * 1e-3);
+            let t = b.binary(crate::ir::BinaryOp::Mul, x, c);
+            acc = b.binary(crate::ir::BinaryOp::Min, acc, t);
+        }
+        let f = b.finish(acc);
+        let bg = JitEvaluator::new(&f).unwrap().in_background();
+        let reference = Interpreter::new(f.clone());
+        let g = bg.point_grad([0.5, 0.0, 0.0]);
+        let want = reference.point_grad([0.5, 0.0, 0.0]);
+        assert!(same(g.v, want.v) && (0..3).all(|k| same(g.d[k], want.d[k])));
+        assert!(bg.compile_times().iter().all(|(k, _)| *k != "point_grad"));
     }
 }
