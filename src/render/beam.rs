@@ -27,7 +27,8 @@
 
 use super::camera::{CornerRays, PixelRay};
 use super::probe::{self, Form, Rect, Sweep};
-use super::ray::{refine, scene_point, trace_ray};
+use super::ray::{scene_point, trace_ray};
+use super::refine::{Bracket, refine_batch};
 use super::stats::RenderStats;
 use super::tracer::{TileState, Tracer};
 use super::{Class, Hit};
@@ -451,7 +452,9 @@ fn start_hull(tr: &Tracer<'_>, tile: &mut TileRays, b: Rect) -> Option<IBox> {
     hull
 }
 
-// Every ray of the block has its first root in [ta, tb]: refine per pixel.
+// Every ray of the block has its first root in [ta, tb]: refine per pixel,
+// the pixels' searches together (`refine_batch`, the same bits as one by
+// one). A pixel whose refinement fails gets a full ray.
 fn include_block(
     tr: &Tracer<'_>,
     tile: &mut TileRays,
@@ -461,9 +464,11 @@ fn include_block(
     live: &[u32],
     st: &mut TileState,
 ) {
+    // (pixel, its clip range, index of its bracket if it has one)
+    let mut pixels: Vec<(usize, (f64, f64), Option<usize>)> = Vec::new();
+    let mut brackets = Vec::new();
     for (i, j) in b.pixels() {
         let k = tile.idx(i, j);
-        let ray = tile.rays[k];
         tile.class[k] = Class::Included;
         let Some((pt0, pt1)) = tile.slabs[k] else {
             tile.hits[k] = None;
@@ -474,18 +479,26 @@ fn include_block(
         // just past the pixel's clip end (within the refinement
         // tolerance) would otherwise be refined to a point inside it.
         let (ca, cb) = (ta.max(pt0), tb.min(pt1));
-        let hit = if ca < cb {
-            refine(tr, &ray, live, ca, cb, &mut st.stats)
-        } else {
-            None
-        };
-        tile.hits[k] = match hit {
+        let bracket = (ca < cb).then(|| {
+            brackets.push(Bracket {
+                ray: tile.rays[k],
+                a: ca,
+                b: cb,
+            });
+            brackets.len() - 1
+        });
+        pixels.push((k, (pt0, pt1), bracket));
+    }
+    let hits = refine_batch(tr, &brackets, live, &mut st.stats);
+    for (k, (pt0, pt1), bracket) in pixels {
+        tile.hits[k] = match bracket.and_then(|i| hits[i]) {
             Some(h) if h.t >= pt0 && h.t <= pt1 => Some(h),
             // The root lies outside this pixel's own clip range (only
             // at the bounds' edges), or rounding hid the bracket's sign
             // change: this pixel gets a full ray.
             _ => {
                 tile.class[k] = Class::Ray;
+                let ray = tile.rays[k];
                 trace_ray(tr, &ray, pt0, pt1, live, st)
             }
         };

@@ -39,6 +39,7 @@ mod groups;
 pub mod output;
 mod probe;
 pub mod ray;
+mod refine;
 pub mod shade;
 pub mod stats;
 mod tile;

@@ -27,6 +27,7 @@
 
 use super::Hit;
 use super::camera::PixelRay;
+pub(crate) use super::refine::refine;
 use super::tracer::{TileState, Tracer};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, ray_box};
@@ -35,7 +36,7 @@ use crate::render::stats::RenderStats;
 // Caps that keep a pathological function from stalling a render; reaching
 // one counts as a hit at the current piece (never a silent miss).
 const MAX_RAY_STEPS: usize = 20_000;
-const MAX_REFINE_STEPS: usize = 200;
+
 // How much narrower than the depth tolerance a piece without a sign change
 // must be before the tangency policy draws it (see the module doc).
 const TANGENT_SPLIT: f64 = 64.0;
@@ -55,95 +56,6 @@ pub(crate) fn scene_point(
         }
     }
     best
-}
-
-/// Finds a root of `f` in [a, b] with `f(a) > 0 >= f(b)` to within `tol`
-/// (Illinois false position, with a bisection step every fourth iteration
-/// so the bracket always shrinks).
-pub(crate) fn illinois(
-    mut f: impl FnMut(f64) -> f64,
-    mut a: f64,
-    mut b: f64,
-    mut fa: f64,
-    mut fb: f64,
-    tol: f64,
-) -> f64 {
-    let mut side = 0i8;
-    for it in 0..MAX_REFINE_STEPS {
-        if b - a <= tol {
-            break;
-        }
-        let mut c = if it % 4 == 3 || !(fa - fb).is_finite() || fa == fb {
-            0.5 * (a + b)
-        } else {
-            b - fb * (b - a) / (fb - fa)
-        };
-        if !(c > a && c < b) {
-            c = 0.5 * (a + b);
-        }
-        let fc = f(c);
-        if fc.is_nan() {
-            // Undefined inside the bracket: shrink towards the front end.
-            b = c;
-            continue;
-        }
-        if fc > 0.0 {
-            a = c;
-            fa = fc;
-            if side == 1 {
-                fb *= 0.5;
-            }
-            side = 1;
-        } else {
-            b = c;
-            fb = fc;
-            if side == -1 {
-                fa *= 0.5;
-            }
-            side = -1;
-        }
-    }
-    0.5 * (a + b)
-}
-
-/// Refines the first root of the scene function on the pixel's ray in the
-/// bracket [a, b] (f(a) > 0 ≥ f(b) expected), returning the hit.
-pub(crate) fn refine(
-    tr: &Tracer<'_>,
-    ray: &PixelRay,
-    live: &[u32],
-    a: f64,
-    b: f64,
-    st: &mut RenderStats,
-) -> Option<Hit> {
-    let fa = scene_point(tr, live, ray.at(a), st).0;
-    let fb = scene_point(tr, live, ray.at(b), st).0;
-    if !(fa > 0.0 && fb <= 0.0) {
-        return None;
-    }
-    let tol = tr.cam.tolerance(a);
-    let mut evals = 0u64;
-    let t = illinois(
-        |t| {
-            evals += live.len() as u64;
-            let p = ray.at(t);
-            live.iter()
-                .map(|&k| tr.evals[k as usize].point(p))
-                .fold(f64::INFINITY, f64::min)
-        },
-        a,
-        b,
-        fa,
-        fb,
-        tol,
-    );
-    st.point_evals += evals;
-    let obj = scene_point(tr, live, ray.at(t), st).1;
-    Some(Hit {
-        t,
-        obj,
-        inside: false,
-    })
 }
 
 /// Point test of the start: a ray that begins inside a solid hits at t0.
@@ -503,12 +415,6 @@ mod tests {
 
     fn h(v: f64) -> Interval {
         Interval::point(v)
-    }
-
-    #[test]
-    fn illinois_converges_within_tolerance() {
-        let t = illinois(|t| 2.0 - t * t, 0.0, 2.0, 2.0, -2.0, 1e-10);
-        assert!((t - 2f64.sqrt()).abs() <= 1e-10);
     }
 
     #[test]
