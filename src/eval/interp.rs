@@ -258,10 +258,6 @@ fn from_dual((v, d): Dual<f64>) -> Grad {
     }
 }
 
-fn idual(g: IntervalGrad) -> Dual<Interval> {
-    (g.v, g.d.map(Some))
-}
-
 fn from_idual((v, d): Dual<Interval>) -> IntervalGrad {
     IntervalGrad {
         v,
@@ -299,7 +295,25 @@ fn run_grad(ops: &[Op], p: [f64; 3], vals: &mut Vec<Grad>) {
 /// Forward mode over a box; the partials of coordinate k start as
 /// `seed[k]` (unit vectors for the gradient, `[v_k, 0, 0]` for the
 /// derivative along v).
-fn run_igrad(ops: &[Op], b: [Interval; 3], seed: [[Interval; 3]; 3], vals: &mut Vec<IntervalGrad>) {
+/// Interval values and partials of every op over `b`, each variable's
+/// partials seeded by `seed`. Only the first `slots` partials are
+/// computed (the rest read as 0): a directional derivative needs one, and
+/// each partial is computed from the same partial of the operands alone,
+/// so the ones computed keep their bits.
+fn run_igrad(
+    ops: &[Op],
+    b: [Interval; 3],
+    seed: [[Interval; 3]; 3],
+    slots: usize,
+    vals: &mut Vec<IntervalGrad>,
+) {
+    let idual = |g: IntervalGrad| -> Dual<Interval> {
+        let mut d = [None; 3];
+        for (k, dk) in d.iter_mut().enumerate().take(slots) {
+            *dk = Some(g.d[k]);
+        }
+        (g.v, d)
+    };
     vals.clear();
     for op in ops {
         let v = match *op {
@@ -355,7 +369,7 @@ impl Evaluator for Interpreter {
         let (o, z) = (Interval::point(1.0), Interval::point(0.0));
         let unit = [[o, z, z], [z, o, z], [z, z, o]];
         SCRATCH.with_borrow_mut(|s| {
-            run_igrad(&self.f.ops, b, unit, &mut s.igrad);
+            run_igrad(&self.f.ops, b, unit, 3, &mut s.igrad);
             s.igrad[self.f.root.index()]
         })
     }
@@ -364,7 +378,7 @@ impl Evaluator for Interpreter {
         let z = Interval::point(0.0);
         let seed = v.map(|vk| [vk, z, z]);
         SCRATCH.with_borrow_mut(|s| {
-            run_igrad(&self.f.ops, b, seed, &mut s.igrad);
+            run_igrad(&self.f.ops, b, seed, 1, &mut s.igrad);
             let r = s.igrad[self.f.root.index()];
             [r.v, r.d[0]]
         })
