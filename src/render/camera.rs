@@ -222,10 +222,24 @@ impl RayCamera {
         let (oc, dc) = (column(self.o0, self.ox), column(self.d0, self.dx));
         let (or, dr) = (row(self.oy), row(self.dy));
         let sum = |a: &IBox, b: &IBox| -> IBox { [a[0].add(b[0]), a[1].add(b[1]), a[2].add(b[2])] };
+        // A parallel camera's direction terms are the same for every column
+        // and row: their sum, and its midpoint, are then computed once (the
+        // same bits, from the same operands).
+        let same = |v: &[IBox]| v.windows(2).all(|p| bits(&p[0]) == bits(&p[1]));
+        let parallel = (same(&dc) && same(&dr)).then(|| {
+            let d = sum(&dc[0], &dr[0]);
+            (d, [d[0].mid(), d[1].mid(), d[2].mid()])
+        });
         let mut rays = Vec::with_capacity((w * h) as usize);
         for j in 0..h as usize {
             for i in 0..w as usize {
-                rays.push(PixelRay::new(sum(&oc[i], &or[j]), sum(&dc[i], &dr[j])));
+                let o = sum(&oc[i], &or[j]);
+                let om = [o[0].mid(), o[1].mid(), o[2].mid()];
+                let (d, dm) = parallel.unwrap_or_else(|| {
+                    let d = sum(&dc[i], &dr[j]);
+                    (d, [d[0].mid(), d[1].mid(), d[2].mid()])
+                });
+                rays.push(PixelRay { o, d, om, dm });
             }
         }
         rays
@@ -259,6 +273,18 @@ impl RayCamera {
     pub fn tolerance(&self, t: f64) -> f64 {
         (0.25 * self.spacing(t)).max(TOLERANCE_FLOOR)
     }
+}
+
+// The bits of a box's bounds, for exact comparison (-0 and 0 differ).
+fn bits(b: &IBox) -> [u64; 6] {
+    [
+        b[0].lo.to_bits(),
+        b[0].hi.to_bits(),
+        b[1].lo.to_bits(),
+        b[1].hi.to_bits(),
+        b[2].lo.to_bits(),
+        b[2].hi.to_bits(),
+    ]
 }
 
 /// Enclosures of the origin and direction of a block's four corner rays.
