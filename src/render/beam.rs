@@ -187,14 +187,17 @@ fn beam_tests(
     st.stats.blocks_undecided += 1;
     // Objects positive over the whole remaining beam are dropped below.
     let rest = corners.hull(Interval::new(ta, t1));
-    let sub_live: Vec<u32> = live
-        .iter()
-        .copied()
-        .filter(|&k| {
-            let v = tr.interval(k as usize, rest, &mut st.stats);
-            !(v.is_empty() || v.lo > 0.0)
-        })
-        .collect();
+    let sub_live: Vec<u32> = if live.len() == 1 {
+        live.to_vec()
+    } else {
+        live.iter()
+            .copied()
+            .filter(|&k| {
+                let v = tr.interval(k as usize, rest, &mut st.stats);
+                !(v.is_empty() || v.lo > 0.0)
+            })
+            .collect()
+    };
     // The sub-blocks work near the first candidate piece: prune there.
     let window = Interval::new(ta, t1.min(ta + PRUNE_WINDOW * (tb - ta).max(min_w(ta))));
     split_pruned(tr, tile, b, (xs, ys, window), ta, &sub_live, st);

@@ -157,6 +157,7 @@ mod tests {
             prune: true,
             flat: false,
             groups: Default::default(),
+            slice_ends: std::sync::Arc::new([]),
         }
     }
 
@@ -227,6 +228,42 @@ mod tests {
                 }
             }
             assert!(groups_met > 0);
+        }
+    }
+
+    // A tile's slices halve its beam down to about twice its width, and
+    // sweeps cut any range inside it at the slices' ends: the pieces cover
+    // the range, nearest last, each inside one slice.
+    #[test]
+    fn sweeps_start_from_pieces_inside_single_slices() {
+        let camera = Camera {
+            eye: [0.3, 0.2, 5.0],
+            target: [0.2, 0.1, -0.3],
+            up: [0.0, 1.0, 0.0],
+            projection: Projection::Perspective { fov_deg: 50.0 },
+        };
+        let tr = tracer(&camera, 256);
+        let (xs, ys, t) = ((64.5, 95.5), (32.5, 63.5), Interval::new(3.0, 7.5));
+        let ends = tr.slice_ends(xs, ys, t);
+        assert!(ends.len() >= 3, "{ends:?}");
+        assert!(ends.windows(2).all(|w| w[0] < w[1]) && ends[0] > t.lo);
+        let local = tracer(&camera, 256).with_slice_ends(ends.clone());
+        let mut rng = crate::ir::random::Rng::new(3);
+        for _ in 0..100 {
+            let a = rng.range(t.lo, t.hi);
+            let b = rng.range(a, t.hi);
+            let pieces = local.first_pieces(a, b);
+            assert_eq!(pieces.last().map(|p| p.0), Some(a));
+            assert_eq!(pieces.first().map(|p| p.1), Some(b));
+            for w in pieces.windows(2) {
+                assert_eq!(w[0].0, w[1].1, "pieces must meet");
+            }
+            for (lo, hi) in pieces {
+                assert!(
+                    !ends.iter().any(|&e| e > lo && e < hi),
+                    "[{lo}, {hi}] crosses a slice end"
+                );
+            }
         }
     }
 }

@@ -130,7 +130,7 @@ pub(crate) enum Sweep {
 /// `excluded` proves free of surface, front to back (see
 /// [`first_candidate`]); a `flat` scene gets one test over the whole range.
 pub(crate) fn sweep(
-    (flat, pieces): (bool, usize),
+    (flat, pieces): (bool, Vec<(f64, f64)>),
     t0: f64,
     t1: f64,
     min_w: impl Fn(f64) -> f64,
@@ -143,26 +143,23 @@ pub(crate) fn sweep(
             Sweep::Flat
         };
     }
-    match first_candidate(t0, t1, pieces, min_w, excluded) {
+    match first_candidate(pieces, min_w, excluded) {
         Some((ta, tb)) => Sweep::Candidate(ta, tb),
         None => Sweep::Empty,
     }
 }
 
 /// The front-to-back rejection sweep over `[t0, t1]`, cut first into
-/// `pieces` equal pieces (see `Tracer::first_pieces`): bisects nearest
+/// `pieces` (a stack, nearest last; see `Tracer::first_pieces`): bisects nearest
 /// half first, drops every piece `excluded` proves free of surface, and
 /// returns the first piece it cannot drop once that piece is narrower than
 /// `min_w(start)` (or after [`MAX_SWEEP_PIECES`] pieces); `None` when the
 /// whole range is dropped.
 fn first_candidate(
-    t0: f64,
-    t1: f64,
-    pieces: usize,
+    mut stack: Vec<(f64, f64)>,
     min_w: impl Fn(f64) -> f64,
     mut excluded: impl FnMut(Interval) -> bool,
 ) -> Option<(f64, f64)> {
-    let mut stack = equal_pieces(t0, t1, pieces);
     let mut pieces = 0usize;
     while let Some((a, c)) = stack.pop() {
         pieces += 1;
@@ -254,7 +251,7 @@ mod tests {
     fn the_sweep_finds_the_first_piece_with_surface() {
         for pieces in [1, 4, 5] {
             let s = sweep(
-                (false, pieces),
+                (false, equal_pieces(0.0, 8.0, pieces)),
                 0.0,
                 8.0,
                 |_| 0.5,
@@ -264,10 +261,20 @@ mod tests {
                 panic!("{s:?}")
             };
             assert!(a <= 3.0 && b >= 3.0 && b - a <= 0.5, "{a} {b}");
-            let s = sweep((false, pieces), 0.0, 8.0, |_| 0.5, |_| true);
+            let s = sweep(
+                (false, equal_pieces(0.0, 8.0, pieces)),
+                0.0,
+                8.0,
+                |_| 0.5,
+                |_| true,
+            );
             assert_eq!(s, Sweep::Empty);
         }
-        assert_eq!(sweep((true, 1), 0.0, 8.0, |_| 0.5, |_| false), Sweep::Flat);
+        let whole = equal_pieces(0.0, 8.0, 1);
+        assert_eq!(
+            sweep((true, whole), 0.0, 8.0, |_| 0.5, |_| false),
+            Sweep::Flat
+        );
         let p = equal_pieces(1.0, 2.0, 4);
         assert_eq!(p.last(), Some(&(1.0, 1.25)));
         assert_eq!(p[0], (1.75, 2.0));

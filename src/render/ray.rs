@@ -91,7 +91,7 @@ pub(crate) fn trace_ray(
     if let Some(h) = starts_inside(tr, ray, live, t0, &mut st.stats) {
         return Some(h);
     }
-    let pieces = super::probe::equal_pieces(t0, t1, tr.first_pieces(t0, t1));
+    let pieces = tr.first_pieces(t0, t1);
     let mut steps = 0usize;
     sweep_ray(tr, ray, pieces, live, (&mut steps, f64::INFINITY), st)
 }
@@ -400,6 +400,7 @@ mod tests {
             prune: false,
             flat: false,
             groups: Default::default(),
+            slice_ends: std::sync::Arc::new([]),
         };
         let (o, d) = ([-2.0, 0.0, 0.0], [1.0, 0.0, 0.0]);
         let ray = PixelRay {

@@ -358,6 +358,7 @@ mod tests {
                 prune: false,
                 flat: false,
                 groups: Default::default(),
+                slice_ends: std::sync::Arc::new([]),
             };
             let brackets: Vec<Bracket> = (0..24)
                 .map(|_| {

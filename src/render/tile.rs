@@ -76,8 +76,10 @@ pub(crate) fn render_tile(
     let pruned = prune_to_tile(tr, &tile, spec.h, &mut st);
     let local;
     let tr_vis = match &pruned {
-        Some((evals, live)) => {
-            local = tr.with_evals(evals, live.clone());
+        Some(((evals, live), ends)) => {
+            local = tr
+                .with_evals(evals, live.clone())
+                .with_slice_ends(ends.clone());
             &local
         }
         None => tr,
@@ -152,14 +154,15 @@ fn tile_rays(tr: &Tracer<'_>, spec: &TileSpec<'_>) -> TileRays {
     }
 }
 
-/// Evaluators pruned to the tile's beam: the rays through its pixel
-/// centres over their clipped T ranges.
+/// Evaluators pruned to the tile's beam (the rays through its pixel
+/// centres over their clipped T ranges), and the interior ends of its
+/// slices.
 fn prune_to_tile(
     tr: &Tracer<'_>,
     tile: &TileRays,
     th: u32,
     st: &mut TileState,
-) -> Option<PrunedEvals> {
+) -> Option<(PrunedEvals, Vec<f64>)> {
     let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
     for &(a, c) in tile.slabs.iter().flatten() {
         t0 = t0.min(a);
@@ -170,7 +173,9 @@ fn prune_to_tile(
     }
     let xs = (f64::from(tile.x0) + 0.5, f64::from(tile.x0 + tile.w) - 0.5);
     let ys = (f64::from(tile.y0) + 0.5, f64::from(tile.y0 + th) - 0.5);
-    tr.pruned_to_beam(xs, ys, Interval::new(t0, t1), st)
+    let t = Interval::new(t0, t1);
+    let pruned = tr.pruned_to_beam(xs, ys, t, st)?;
+    Some((pruned, tr.slice_ends(xs, ys, t)))
 }
 
 // Finds every pixel's first hit with `method`.

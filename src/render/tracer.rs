@@ -71,6 +71,9 @@ pub(crate) struct Tracer<'a> {
     /// Evaluators pruned to groups of tiles, which tiles prune theirs
     /// from (shared by the tracers of one camera).
     pub groups: Arc<TileGroups>,
+    /// The interior ends, in increasing order, of the slices of the tile
+    /// these evaluators are pruned to (empty outside such a tile).
+    pub slice_ends: Arc<[f64]>,
 }
 
 /// Whether the mean-value form still pays in one tile, per block size.
@@ -147,6 +150,7 @@ impl<'a> Tracer<'a> {
             prune,
             flat: constant_along_rays(&cam, scene),
             groups: Arc::default(),
+            slice_ends: Arc::new([]),
         }
     }
 
@@ -159,6 +163,7 @@ impl<'a> Tracer<'a> {
             live_ops: self.live_ops.clone(),
             tapes: self.tapes.clone(),
             groups: Arc::default(),
+            slice_ends: Arc::new([]),
             ..*self
         }
     }
@@ -179,17 +184,36 @@ impl<'a> Tracer<'a> {
             live_ops,
             tapes: self.tapes.clone(),
             groups: Arc::clone(&self.groups),
+            slice_ends: Arc::clone(&self.slice_ends),
             ..*self
         }
     }
 
-    /// How many equal pieces a sweep along rays over `[t0, t1]` starts
-    /// from: with pruned tapes, pieces as deep as the slices of a tile's
-    /// tree of regions (see [`Tracer::pruned_to_beam`]), so that even the
-    /// first evaluations run a slice's short tape rather than the whole
-    /// function; else one. A function of the range, camera and scene
-    /// alone, so that every method cuts a ray the same way.
-    pub(crate) fn first_pieces(&self, t0: f64, t1: f64) -> usize {
+    /// The pieces a sweep along rays over `[t0, t1]` starts from, as a
+    /// stack (the nearest last): inside a tile whose functions are pruned
+    /// to a tree of slices (see [`Tracer::pruned_to_beam`]), the range cut
+    /// at the slices' ends, so that every piece lies in one slice and even
+    /// the first evaluations run a slice's short tape rather than the
+    /// whole function; elsewhere with pruning on, equal pieces about as
+    /// deep as such slices; else one. A function of the range and of the
+    /// tile (its camera, scene and T range) alone, so that every method
+    /// cuts a ray the same way.
+    pub(crate) fn first_pieces(&self, t0: f64, t1: f64) -> Vec<(f64, f64)> {
+        if !self.slice_ends.is_empty() && t0 < t1 {
+            let inner = self
+                .slice_ends
+                .iter()
+                .copied()
+                .filter(|&c| c > t0 && c < t1);
+            let ends: Vec<f64> = std::iter::once(t0).chain(inner).chain([t1]).collect();
+            return ends.windows(2).rev().map(|w| (w[0], w[1])).collect();
+        }
+        super::probe::equal_pieces(t0, t1, self.equal_pieces(t0, t1))
+    }
+
+    // How many equal pieces `first_pieces` cuts `[t0, t1]` into without a
+    // tile's slices.
+    fn equal_pieces(&self, t0: f64, t1: f64) -> usize {
         if self.flat || !self.tapes.iter().any(Option::is_some) {
             return 1;
         }
@@ -203,8 +227,48 @@ impl<'a> Tracer<'a> {
 
     /// Whether the scene is flat, and [`Tracer::first_pieces`], for
     /// `probe::sweep`.
-    pub(crate) fn sweep_mode(&self, t0: f64, t1: f64) -> (bool, usize) {
+    pub(crate) fn sweep_mode(&self, t0: f64, t1: f64) -> (bool, Vec<(f64, f64)>) {
         (self.flat, self.first_pieces(t0, t1))
+    }
+
+    /// The interior ends, in increasing order, of the slices that
+    /// [`Tracer::pruned_to_beam`] cuts the beam through the pixel centres
+    /// `xs × ys` over `t` into.
+    pub(crate) fn slice_ends(&self, xs: (f64, f64), ys: (f64, f64), t: Interval) -> Vec<f64> {
+        fn collect(
+            tr: &Tracer<'_>,
+            b: ((f64, f64), (f64, f64)),
+            t: Interval,
+            depth: u32,
+            out: &mut Vec<f64>,
+        ) {
+            if tr.halves(b.0, b.1, t, depth) {
+                let m = t.mid();
+                collect(tr, b, Interval::new(t.lo, m), depth - 1, out);
+                out.push(m);
+                collect(tr, b, Interval::new(m, t.hi), depth - 1, out);
+            }
+        }
+        let mut out = Vec::new();
+        collect(self, (xs, ys), t, SLICE_DEPTH, &mut out);
+        out
+    }
+
+    // Whether the tree of regions of the beam through `xs × ys` halves its
+    // region over `t` along the rays, with `depth` levels left: while a
+    // slice is deeper than `SLICE_ASPECT` times its width, unless the
+    // scene is flat.
+    fn halves(&self, xs: (f64, f64), ys: (f64, f64), t: Interval, depth: u32) -> bool {
+        let w = |r: (f64, f64)| (r.1 - r.0 + 1.0) * self.cam.spacing(t.hi);
+        let width = w(xs).max(w(ys));
+        !(depth == 0 || self.flat || t.width() <= SLICE_ASPECT * width)
+    }
+
+    /// The same tracer with the interior ends of a tile's slices (see
+    /// [`Tracer::first_pieces`]).
+    pub(crate) fn with_slice_ends(mut self, ends: Vec<f64>) -> Self {
+        self.slice_ends = ends.into();
+        self
     }
 
     /// Object `k` over `b`.
@@ -528,11 +592,7 @@ impl Beam<'_> {
         } else {
             Regional::delegating(region, own, (Arc::clone(above.0), above.1), parent)
         };
-        let width = {
-            let w = |r: (f64, f64)| (r.1 - r.0 + 1.0) * tr.cam.spacing(t.hi);
-            w(self.xs).max(w(self.ys))
-        };
-        if depth == 0 || tr.flat || t.width() <= SLICE_ASPECT * width {
+        if !tr.halves(self.xs, self.ys, t, depth) {
             return Some(node);
         }
         let below = (Arc::clone(node.answer()), node.answer_len());
