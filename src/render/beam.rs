@@ -171,9 +171,12 @@ fn beam_tests(
     {
         st.stats.blocks_included += 1;
         // Every pixel refines its root inside the bracket's beam: prune
-        // there (a few pixels wide and a bracket deep).
+        // there (a few pixels wide and a bracket deep), if that is inside
+        // one slice of the tile (else its points run the slices' tapes).
         let bracket = tr
-            .beam_region(xs, ys, Interval::new(ta, tb2))
+            .within_one_slice(ta, tb2)
+            .then(|| tr.beam_region(xs, ys, Interval::new(ta, tb2)))
+            .flatten()
             .and_then(|region| tr.pruned_to(region, st));
         match bracket {
             Some((evals, live_ops)) => {
@@ -198,8 +201,12 @@ fn beam_tests(
             })
             .collect()
     };
-    // The sub-blocks work near the first candidate piece: prune there.
-    let window = Interval::new(ta, t1.min(ta + PRUNE_WINDOW * (tb - ta).max(min_w(ta))));
+    // The sub-blocks work near the first candidate piece: prune there, up
+    // to the end of the tile's slice that holds it (pruning across slices
+    // would prune the long tape of the region around them).
+    let reach = ta + PRUNE_WINDOW * (tb - ta).max(min_w(ta));
+    let end = tr.slice_end_after(ta).map_or(t1, |e| e.min(t1));
+    let window = Interval::new(ta, end.min(reach));
     split_pruned(tr, tile, b, (xs, ys, window), ta, &sub_live, st);
 }
 

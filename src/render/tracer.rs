@@ -264,6 +264,19 @@ impl<'a> Tracer<'a> {
         !(depth == 0 || self.flat || t.width() <= SLICE_ASPECT * width)
     }
 
+    /// The first end of a slice of this tile after `t`, if any.
+    pub(crate) fn slice_end_after(&self, t: f64) -> Option<f64> {
+        let i = self.slice_ends.partition_point(|&e| e <= t);
+        self.slice_ends.get(i).copied()
+    }
+
+    /// Whether `[a, b]` lies inside one slice of this tile (always, outside
+    /// a sliced tile): pruning to a region inside one slice prunes that
+    /// slice's short tape, not the long one of the region around it.
+    pub(crate) fn within_one_slice(&self, a: f64, b: f64) -> bool {
+        self.slice_end_after(a).is_none_or(|e| e >= b)
+    }
+
     /// The same tracer with the interior ends of a tile's slices (see
     /// [`Tracer::first_pieces`]).
     pub(crate) fn with_slice_ends(mut self, ends: Vec<f64>) -> Self {
