@@ -14,6 +14,7 @@ use crate::ir::semantics::*;
 use crate::ir::validate::{InvalidIr, debug_validate, validate};
 use crate::ir::{BinaryOp, Function, Op, UnaryOp};
 use std::cell::RefCell;
+use std::sync::Arc;
 
 /// The interpreter's [`Arith`]: plain f64 and [`Interval`] arithmetic.
 struct Reference;
@@ -193,7 +194,7 @@ fn pick_operand(
 /// The reference evaluator: walks the op list once per evaluation.
 #[derive(Clone, Debug)]
 pub struct Interpreter {
-    f: Function,
+    f: Arc<Function>,
 }
 
 // Per-thread value slots, reused across calls so an evaluation allocates
@@ -214,6 +215,12 @@ impl Interpreter {
     /// An interpreter for `f`, which must be valid IR (checked in debug
     /// builds; see [`Interpreter::try_new`] for untrusted input).
     pub fn new(f: Function) -> Interpreter {
+        Interpreter::shared(Arc::new(f))
+    }
+
+    /// [`Interpreter::new`] for a function shared with its owner (a
+    /// pruned tape's), without copying it.
+    pub fn shared(f: Arc<Function>) -> Interpreter {
         debug_validate(&f, "Interpreter::new");
         Interpreter { f }
     }
@@ -221,7 +228,7 @@ impl Interpreter {
     /// An interpreter for `f`, or why `f` is not valid IR.
     pub fn try_new(f: Function) -> Result<Interpreter, InvalidIr> {
         validate(&f)?;
-        Ok(Interpreter { f })
+        Ok(Interpreter { f: Arc::new(f) })
     }
 
     /// The function it evaluates.

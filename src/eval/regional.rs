@@ -48,7 +48,7 @@ impl Regional {
     pub fn new(region: IBox, tape: Tape, parent: Arc<dyn Evaluator>) -> Regional {
         Regional {
             region,
-            answer: Arc::new(Interpreter::new(tape.function().clone())),
+            answer: Arc::new(Interpreter::shared(tape.shared_function())),
             own: true,
             answer_len: tape.len(),
             tape,

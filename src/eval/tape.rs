@@ -26,6 +26,8 @@
 //! its definition). A child prunes further to a smaller box from its own
 //! tape, never from the whole function.
 
+use std::sync::Arc;
+
 use crate::interval::Interval;
 use crate::ir::prune::{Facts, decided_operand, facts};
 use crate::ir::semantics::{
@@ -67,7 +69,7 @@ impl Instr {
 /// A register-allocated evaluation tape (see the module doc).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Tape {
-    ssa: Function,
+    ssa: Arc<Function>,
     code: Vec<Instr>,
     registers: usize,
 }
@@ -127,6 +129,12 @@ impl Tape {
     /// The ops as a function (its root is the last op).
     pub fn function(&self) -> &Function {
         &self.ssa
+    }
+
+    /// [`Tape::function`], shared (an interpreter of the tape holds it
+    /// without a copy).
+    pub fn shared_function(&self) -> Arc<Function> {
+        Arc::clone(&self.ssa)
     }
 
     /// The instructions, one per op of [`Tape::function`].
@@ -367,7 +375,7 @@ impl Tape {
         }
         let root = index[root];
         Tape {
-            ssa: Function { ops, root },
+            ssa: Arc::new(Function { ops, root }),
             code,
             registers: registers as usize,
         }
