@@ -41,6 +41,7 @@ mod probe;
 pub mod ray;
 mod refine;
 pub mod shade;
+mod slices;
 pub mod stats;
 mod tile;
 mod tracer;
