@@ -29,7 +29,9 @@
 use std::sync::Arc;
 
 use crate::interval::Interval;
-use crate::ir::prune::{Facts, decided_operand, facts};
+use crate::ir::prune::{
+    Facts, binary_facts, const_facts, decided_operand, powi_facts, unary_facts, var_facts,
+};
 use crate::ir::semantics::{
     interval_binary, interval_unary, point_binary, point_powi, point_unary,
 };
@@ -80,8 +82,8 @@ pub struct Tape {
 pub struct Workspace {
     points: Vec<f64>,
     intervals: Vec<Interval>,
-    // Per-op scratch of `Tape::prune`.
-    values: Vec<Interval>,
+    // Scratch of `Tape::prune`: facts per register, aliases and liveness
+    // per op.
     facts: Vec<Facts>,
     alias: Vec<usize>,
     live: Vec<bool>,
@@ -259,38 +261,51 @@ impl Tape {
     ) -> Option<PrunedTape> {
         let ops = &self.ssa.ops;
         let n = ops.len();
+        // Values and facts live in registers, as in evaluation: a few dozen
+        // slots, not one per op.
         let regs = &mut ws.intervals;
         regs.clear();
         regs.resize(self.registers, Interval::point(0.0));
-        let value = &mut ws.values;
-        value.clear();
-        value.resize(n, Interval::point(0.0));
         let fact = &mut ws.facts;
         fact.clear();
-        fact.resize(n, Facts::default());
+        fact.resize(self.registers, Facts::default());
         // alias[k]: the op whose value op k always equals on the box.
         let alias = &mut ws.alias;
         alias.clear();
         alias.extend(0..n);
         let mut decided = 0;
-        for (k, (op, instr)) in ops.iter().zip(&self.code).enumerate() {
-            let v = match *instr {
-                Instr::Var(_, var) => b[var.index()],
-                Instr::Const(_, c) => Interval::point(c),
-                Instr::Unary(_, u, a) => interval_unary(u, regs[a as usize]),
-                Instr::Binary(_, o, x, y) => interval_binary(o, regs[x as usize], regs[y as usize]),
-                Instr::Powi(_, a, n) => regs[a as usize].powi(n),
+        for (k, instr) in self.code.iter().enumerate() {
+            let at = |r: Reg| (regs[r as usize], fact[r as usize]);
+            let (out, v, f) = match *instr {
+                Instr::Var(o, var) => {
+                    let v = b[var.index()];
+                    (o, v, var_facts(v))
+                }
+                Instr::Const(o, c) => (o, Interval::point(c), const_facts(c)),
+                Instr::Unary(o, u, a) => {
+                    let a = at(a);
+                    let v = interval_unary(u, a.0);
+                    (o, v, unary_facts(u, a, v))
+                }
+                Instr::Binary(o, op, x, y) => {
+                    let (x, y) = (at(x), at(y));
+                    if let Some(w) = decided_operand(op, x, y)
+                        && let Op::Binary(_, xa, ya) = ops[k]
+                    {
+                        alias[k] = alias[[xa, ya][w].index()];
+                        decided += 1;
+                    }
+                    let v = interval_binary(op, x.0, y.0);
+                    (o, v, binary_facts(op, x, y, v))
+                }
+                Instr::Powi(o, a, p) => {
+                    let a = at(a);
+                    let v = a.0.powi(p);
+                    (o, v, powi_facts(p, a, v))
+                }
             };
-            regs[instr.out() as usize] = v;
-            let arg = |a: ValueId| (value[a.index()], fact[a.index()]);
-            if let Op::Binary(o, x, y) = *op
-                && let Some(w) = decided_operand(o, arg(x), arg(y))
-            {
-                alias[k] = alias[[x, y][w].index()];
-                decided += 1;
-            }
-            fact[k] = facts(op, v, arg);
-            value[k] = v;
+            regs[out as usize] = v;
+            fact[out as usize] = f;
         }
         if decided == 0 {
             return None;

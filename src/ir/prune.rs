@@ -54,52 +54,103 @@ pub struct Facts {
 
 /// The facts of `op`'s value over a box, from its own interval `value`
 /// and its operands' intervals and facts (`arg`). The one statement of
-/// the rules, shared by [`prune`] and the tapes' pruning.
+/// the rules, shared by [`prune`] and the tapes' pruning (which calls the
+/// per-arity rules below directly).
 pub fn facts(op: &Op, value: Interval, arg: impl Fn(ValueId) -> (Interval, Facts)) -> Facts {
-    let finite = |i: Interval| i.lo.is_finite() && i.hi.is_finite();
-    // By arity rather than over `op.operands()`: this runs for every op of
-    // every pruning, and the iterator chain did not compile away.
-    let (args_defined, args_contained) = match *op {
-        Op::Var(_) | Op::Const(_) => (true, true),
-        Op::Unary(_, a) | Op::Powi(a, _) => {
-            let f = arg(a).1;
-            (f.defined, f.contained)
+    match *op {
+        Op::Var(_) => var_facts(value),
+        Op::Const(c) => const_facts(c),
+        Op::Unary(u, a) => {
+            let (va, fa) = arg(a);
+            unary_facts(u, (va, fa), value)
         }
-        Op::Binary(_, a, b) => {
-            let (fa, fb) = (arg(a).1, arg(b).1);
-            (fa.defined && fb.defined, fa.contained && fb.contained)
-        }
-    };
-    let nonneg = match *op {
-        Op::Const(c) => c >= 0.0,
-        Op::Unary(UnaryOp::Square | UnaryOp::Abs | UnaryOp::Sqrt | UnaryOp::Exp, _) => true,
-        Op::Powi(_, n) => n % 2 == 0,
-        Op::Binary(
-            BinaryOp::Add | BinaryOp::Mul | BinaryOp::Div | BinaryOp::Min | BinaryOp::Max,
-            x,
-            y,
-        ) => arg(x).1.nonneg && arg(y).1.nonneg,
-        _ => false,
-    };
-    let domain = match *op {
-        Op::Unary(UnaryOp::Sqrt, a) => arg(a).0.lo >= 0.0 || arg(a).1.nonneg,
-        Op::Unary(UnaryOp::Ln, a) => arg(a).0.lo > 0.0,
-        Op::Binary(BinaryOp::Div, _, d) => arg(d).0.lo > 0.0 || arg(d).0.hi < 0.0,
-        Op::Binary(BinaryOp::Pow, base, _) => arg(base).0.lo > 0.0,
-        Op::Powi(a, n) if n < 0 => arg(a).0.lo > 0.0 || arg(a).0.hi < 0.0,
+        Op::Binary(o, a, b) => binary_facts(o, arg(a), arg(b), value),
+        Op::Powi(a, n) => powi_facts(n, arg(a), value),
+    }
+}
+
+fn finite(i: Interval) -> bool {
+    i.lo.is_finite() && i.hi.is_finite()
+}
+
+fn zero_in(i: Interval) -> bool {
+    i.lo <= 0.0 && i.hi >= 0.0
+}
+
+/// The facts of an input coordinate whose interval is `value`.
+#[inline]
+pub fn var_facts(value: Interval) -> Facts {
+    Facts {
+        defined: finite(value),
+        nonneg: false,
+        contained: true,
+    }
+}
+
+/// The facts of the constant `c`.
+#[inline]
+pub fn const_facts(c: f64) -> Facts {
+    Facts {
+        defined: c.is_finite(),
+        nonneg: c >= 0.0,
+        contained: true,
+    }
+}
+
+/// The facts of `u(a)` with value interval `value`.
+#[inline]
+pub fn unary_facts(u: UnaryOp, (va, fa): (Interval, Facts), value: Interval) -> Facts {
+    let nonneg = matches!(
+        u,
+        UnaryOp::Square | UnaryOp::Abs | UnaryOp::Sqrt | UnaryOp::Exp
+    );
+    let domain = match u {
+        UnaryOp::Sqrt => va.lo >= 0.0 || fa.nonneg,
+        UnaryOp::Ln => va.lo > 0.0,
         _ => true,
     };
-    let zero_in = |i: Interval| i.lo <= 0.0 && i.hi >= 0.0;
-    let signed_zero_pole = match *op {
-        Op::Binary(BinaryOp::Div, _, d) => zero_in(arg(d).0),
-        Op::Binary(BinaryOp::Pow, base, _) => arg(base).0.lo <= 0.0,
-        Op::Powi(a, n) => n < 0 && zero_in(arg(a).0),
+    Facts {
+        defined: fa.defined && domain && finite(value),
+        nonneg,
+        contained: fa.contained,
+    }
+}
+
+/// The facts of `o(a, b)` with value interval `value`.
+#[inline]
+pub fn binary_facts(
+    o: BinaryOp,
+    (va, fa): (Interval, Facts),
+    (vb, fb): (Interval, Facts),
+    value: Interval,
+) -> Facts {
+    let nonneg = match o {
+        BinaryOp::Add | BinaryOp::Mul | BinaryOp::Div | BinaryOp::Min | BinaryOp::Max => {
+            fa.nonneg && fb.nonneg
+        }
         _ => false,
     };
+    let (domain, signed_zero_pole) = match o {
+        BinaryOp::Div => (vb.lo > 0.0 || vb.hi < 0.0, zero_in(vb)),
+        BinaryOp::Pow => (va.lo > 0.0, va.lo <= 0.0),
+        _ => (true, false),
+    };
     Facts {
-        defined: args_defined && domain && finite(value),
+        defined: fa.defined && fb.defined && domain && finite(value),
         nonneg,
-        contained: !signed_zero_pole && args_contained,
+        contained: !signed_zero_pole && fa.contained && fb.contained,
+    }
+}
+
+/// The facts of `a^n` with value interval `value`.
+#[inline]
+pub fn powi_facts(n: i32, (va, fa): (Interval, Facts), value: Interval) -> Facts {
+    let domain = n >= 0 || va.lo > 0.0 || va.hi < 0.0;
+    let signed_zero_pole = n < 0 && zero_in(va);
+    Facts {
+        defined: fa.defined && domain && finite(value),
+        nonneg: n % 2 == 0,
+        contained: !signed_zero_pole && fa.contained,
     }
 }
 
