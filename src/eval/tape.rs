@@ -87,6 +87,7 @@ pub struct Workspace {
     facts: Vec<Facts>,
     alias: Vec<usize>,
     live: Vec<bool>,
+    child: ChildScratch,
 }
 
 thread_local! {
@@ -122,10 +123,11 @@ impl Tape {
             ops.push(f.ops[i].map_operands(|a| index[a.index()]));
         }
         let root = index[f.root.index()];
-        let parents: Vec<usize> = (0..ops.len()).collect();
+        let identity: Vec<usize> = (0..ops.len()).collect();
         let ssa = Function { ops, root };
-        let keep = vec![true; ssa.ops.len()];
-        Tape::write_child(&ssa, &parents, &keep)
+        let mut live = Vec::new();
+        liveness(&ssa, &identity, &mut live);
+        Tape::write_child(&ssa, &identity, &live, &mut ChildScratch::default())
     }
 
     /// The ops as a function (its root is the last op).
@@ -311,38 +313,30 @@ impl Tape {
             return None;
         }
         // Ops the child keeps: those the root reads through the aliases.
-        let live = &mut ws.live;
-        live.clear();
-        live.resize(n, false);
-        live[alias[self.ssa.root.index()]] = true;
-        let mut kept = 0;
-        for k in (0..n).rev() {
-            if live[k] && alias[k] == k {
-                kept += 1;
-                for a in ops[k].operands() {
-                    live[alias[a.index()]] = true;
-                }
-            }
-        }
+        let kept = liveness(&self.ssa, alias, &mut ws.live);
         if kept > max_len {
             return None;
         }
-        let keep: Vec<bool> = (0..n).map(|k| alias[k] == k).collect();
         Some(PrunedTape {
-            tape: Tape::write_child(&self.ssa, alias, &keep),
+            tape: Tape::write_child(&self.ssa, alias, &ws.live, &mut ws.child),
             decided,
         })
     }
 
-    /// The one backward pass that writes a tape: from `parent`'s root
-    /// (through `alias`), keeps the ops the root reads among those marked
-    /// `keep`, reading each operand through `alias`, and assigns registers.
-    fn write_child(parent: &Function, alias: &[usize], keep: &[bool]) -> Tape {
+    /// The one backward pass that writes a tape: the ops of `parent` marked
+    /// `live` (see [`liveness`]), each operand read through `alias`, with
+    /// registers assigned as it goes.
+    fn write_child(
+        parent: &Function,
+        alias: &[usize],
+        live: &[bool],
+        scratch: &mut ChildScratch,
+    ) -> Tape {
         let n = parent.ops.len();
         let root = alias[parent.root.index()];
-        let mut live = vec![false; n];
-        live[root] = true;
-        let mut reg: Vec<Option<Reg>> = vec![None; n];
+        let reg = &mut scratch.reg;
+        reg.clear();
+        reg.resize(n, None);
         let mut free: Vec<Reg> = Vec::new();
         let mut registers: Reg = 0;
         let mut take = |free: &mut Vec<Reg>| {
@@ -356,7 +350,7 @@ impl Tape {
         // instruction).
         let mut rev: Vec<(usize, Op, Instr)> = Vec::new();
         for k in (0..n).rev() {
-            if !live[k] || !keep[k] {
+            if !live[k] {
                 continue;
             }
             let op = parent.ops[k].map_operands(|a| ValueId(alias[a.index()] as u32));
@@ -365,7 +359,6 @@ impl Tape {
             free.push(out);
             for a in op.operands() {
                 let a = a.index();
-                live[a] = true;
                 if reg[a].is_none() {
                     reg[a] = Some(take(&mut free));
                 }
@@ -380,7 +373,9 @@ impl Tape {
             };
             rev.push((k, op, instr));
         }
-        let mut index = vec![ValueId(0); n];
+        let index = &mut scratch.index;
+        index.clear();
+        index.resize(n, ValueId(0));
         let mut ops = Vec::with_capacity(rev.len());
         let mut code = Vec::with_capacity(rev.len());
         for (k, op, instr) in rev.into_iter().rev() {
@@ -395,6 +390,32 @@ impl Tape {
             registers: registers as usize,
         }
     }
+}
+
+/// Marks in `live` the ops of `f` its root reads through `alias` (an op
+/// is read in place of the ops that alias it) and returns how many.
+fn liveness(f: &Function, alias: &[usize], live: &mut Vec<bool>) -> usize {
+    let n = f.ops.len();
+    live.clear();
+    live.resize(n, false);
+    live[alias[f.root.index()]] = true;
+    let mut kept = 0;
+    for k in (0..n).rev() {
+        if live[k] && alias[k] == k {
+            kept += 1;
+            for a in f.ops[k].operands() {
+                live[alias[a.index()]] = true;
+            }
+        }
+    }
+    kept
+}
+
+/// Per-op scratch of writing a child tape.
+#[derive(Clone, Default, Debug)]
+pub struct ChildScratch {
+    reg: Vec<Option<Reg>>,
+    index: Vec<ValueId>,
 }
 
 /// The ops the root of `f` reads, in depth-first post-order (operands
