@@ -20,7 +20,7 @@ use crate::scene::{Bounds, Light, Scene};
 /// Block-size classes (log2 of the side) the mean-value policy tells apart.
 pub(crate) const MV_LEVELS: usize = 8;
 /// Tries at one block size before the mean-value policy judges the form.
-const MV_MIN_TRIES: u64 = 64;
+const MV_MIN_TRIES: u64 = 16;
 /// The form stays in use at a block size while at least one try in this
 /// many wins.
 const MV_WIN_RATIO: u64 = 32;
