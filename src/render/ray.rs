@@ -27,7 +27,7 @@
 
 use super::Hit;
 use super::camera::PixelRay;
-pub(crate) use super::refine::refine;
+use super::refine::{refine, sign_change};
 use super::tracer::{TileState, Tracer};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, ray_box};
@@ -155,7 +155,9 @@ fn sweep_ray(
         // root is refined); without one it is a tangency candidate, bisected
         // on down to TANGENT_SPLIT times narrower before the tangency
         // policy draws it (see the module doc).
-        if b - a <= tol && (b - a <= tol / TANGENT_SPLIT || sign_change(tr, ray, live, a, b, stt)) {
+        if b - a <= tol
+            && (b - a <= tol / TANGENT_SPLIT || sign_change(tr, ray, live, (a, b), stt).is_some())
+        {
             return Some(narrow_hit(tr, ray, live, a, b, stt));
         }
         // The sub-pieces to sweep next, nearest last.
@@ -213,21 +215,6 @@ fn centred_positive(
     }
     let off = Interval::new(a, b).sub(Interval::point(m));
     fm.add(dfdt.mul(off)).lo > 0.0
-}
-
-// Whether the scene function's point values show a sign change over
-// [a, b] (positive at a, not positive at b): then a root is there.
-fn sign_change(
-    tr: &Tracer<'_>,
-    ray: &PixelRay,
-    live: &[u32],
-    a: f64,
-    b: f64,
-    st: &mut RenderStats,
-) -> bool {
-    let fa = scene_point(tr, live, ray.at(a), st).0;
-    let fb = scene_point(tr, live, ray.at(b), st).0;
-    fa > 0.0 && fb <= 0.0
 }
 
 // A narrow piece with 0 ∈ F: refine a sign change if the ends show one,

@@ -106,6 +106,21 @@ impl Illinois {
     }
 }
 
+/// The scene function's point values at `a` and `b` on the ray, when they
+/// show a sign change (positive at a, not positive at b): a root is then
+/// in [a, b].
+pub(crate) fn sign_change(
+    tr: &Tracer<'_>,
+    ray: &PixelRay,
+    live: &[u32],
+    (a, b): (f64, f64),
+    st: &mut RenderStats,
+) -> Option<(f64, f64)> {
+    let fa = scene_point(tr, live, ray.at(a), st).0;
+    let fb = scene_point(tr, live, ray.at(b), st).0;
+    (fa > 0.0 && fb <= 0.0).then_some((fa, fb))
+}
+
 /// Refines the first root of the scene function on the pixel's ray in the
 /// bracket [a, b] (f(a) > 0 ≥ f(b) expected), returning the hit.
 pub(crate) fn refine(
@@ -116,11 +131,7 @@ pub(crate) fn refine(
     b: f64,
     st: &mut RenderStats,
 ) -> Option<Hit> {
-    let fa = scene_point(tr, live, ray.at(a), st).0;
-    let fb = scene_point(tr, live, ray.at(b), st).0;
-    if !(fa > 0.0 && fb <= 0.0) {
-        return None;
-    }
+    let (fa, fb) = sign_change(tr, ray, live, (a, b), st)?;
     let tol = tr.cam.tolerance(a);
     let mut evals = 0u64;
     let t = illinois(
