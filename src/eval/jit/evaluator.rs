@@ -57,6 +57,8 @@ struct Inner {
     started: [AtomicBool; Kind::ALL.len()],
     // Answers for the kinds still compiling in the background.
     interp: OnceLock<Interpreter>,
+    // More live ops than `DERIVATIVES_MAX_OPS` (counted once, not per call).
+    long: bool,
 }
 
 impl Inner {
@@ -112,9 +114,12 @@ impl JitEvaluator {
     pub fn new(f: &Function) -> Result<JitEvaluator, JitError> {
         crate::ir::validate::validate(f).map_err(|e| JitError::new("invalid IR", e))?;
         super::isa()?;
+        let live: Arc<[bool]> = lower::live_ops(f).into();
+        let long = live.iter().filter(|&&l| l).count() > DERIVATIVES_MAX_OPS;
         Ok(JitEvaluator {
             inner: Arc::new(Inner {
-                live: lower::live_ops(f).into(),
+                long,
+                live,
                 f: Arc::new(f.clone()),
                 slots: std::array::from_fn(|_| OnceLock::new()),
                 started: std::array::from_fn(|_| AtomicBool::new(false)),
@@ -155,8 +160,7 @@ impl JitEvaluator {
             Kind::Point | Kind::Interval | Kind::PointBatch | Kind::IntervalBatch
         );
         if !exact {
-            let long = self.inner.live.iter().filter(|&&l| l).count() > DERIVATIVES_MAX_OPS;
-            if long {
+            if self.inner.long {
                 return Answer::Interpreted(self.interpreter());
             }
             return self.entry(kind).map_or(Answer::Failed, Answer::Native);
