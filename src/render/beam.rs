@@ -115,11 +115,16 @@ fn block(
         tile.class[k] = Class::Ray;
         return;
     }
-    if t_floor <= t0 && all_start_inside(tr, tile, b, live, &mut st.stats) {
+    // Screen extents of the pixel centres, and the beam's corner rays,
+    // which both tests below read.
+    let xs = ((b.x0 + tile.x0) as f64 + 0.5, (b.x1 + tile.x0) as f64 - 0.5);
+    let ys = ((b.y0 + tile.y0) as f64 + 0.5, (b.y1 + tile.y0) as f64 - 0.5);
+    let corners = tr.cam.corners(xs, ys);
+    if t_floor <= t0 && all_start_inside(tr, tile, b, &corners, live, &mut st.stats) {
         st.stats.blocks_included += 1;
         return;
     }
-    beam_tests(tr, tile, b, (t0, t1), live, st);
+    beam_tests(tr, tile, b, (xs, ys, &corners), (t0, t1), live, st);
 }
 
 // The beam tests of a block of several pixels over its T range: rejected,
@@ -128,18 +133,15 @@ fn beam_tests(
     tr: &Tracer<'_>,
     tile: &mut TileRays,
     b: Rect,
+    (xs, ys, corners): ((f64, f64), (f64, f64), &CornerRays),
     (t0, t1): (f64, f64),
     live: &[u32],
     st: &mut TileState,
 ) {
-    // Screen extents of the pixel centres.
-    let xs = ((b.x0 + tile.x0) as f64 + 0.5, (b.x1 + tile.x0) as f64 - 0.5);
-    let ys = ((b.y0 + tile.y0) as f64 + 0.5, (b.y1 + tile.y0) as f64 - 0.5);
     let side_px = (b.x1 - b.x0).max(b.y1 - b.y0);
     let side = f64::from(side_px);
     let form = Form::Tight(side_px.ilog2() as usize);
     let min_w = |t: f64| probe::min_width(tr, side, t);
-    let corners = tr.cam.corners(xs, ys);
     let eval_min = |t: Interval, st: &mut TileState| {
         probe::scene_interval(tr, live, corners.hull(t), form, st)
     };
@@ -167,7 +169,7 @@ fn beam_tests(
     // Inclusion test: positive at ta, negative at some tb' ahead.
     let end = probe::bracket_end((ta, tb), t1, min_w, |t| eval_min(Interval::point(t), st));
     if let Some(tb2) = end
-        && decreasing(tr, &corners, Interval::new(ta, tb2), live, &mut st.stats)
+        && decreasing(tr, corners, Interval::new(ta, tb2), live, &mut st.stats)
     {
         st.stats.blocks_included += 1;
         // Every pixel refines its root inside the bracket's beam: prune
@@ -374,10 +376,11 @@ fn all_start_inside(
     tr: &Tracer<'_>,
     tile: &mut TileRays,
     b: Rect,
+    corners: &CornerRays,
     live: &[u32],
     st: &mut RenderStats,
 ) -> bool {
-    let Some(hull) = start_hull(tr, tile, b) else {
+    let Some(hull) = start_hull(tr, tile, b, corners) else {
         return false;
     };
     // The smallest object value must be negative: one object negative
@@ -430,7 +433,7 @@ fn all_start_inside(
 // beam's hull over their depths, from its four corner rays; else the hull
 // of the pixels' own start boxes, computed once per tile, which is
 // tighter where the starts spread along the rays.
-fn start_hull(tr: &Tracer<'_>, tile: &mut TileRays, b: Rect) -> Option<IBox> {
+fn start_hull(tr: &Tracer<'_>, tile: &mut TileRays, b: Rect, corners: &CornerRays) -> Option<IBox> {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for (i, j) in b.pixels() {
         if let Some((t0, _)) = tile.slabs[tile.idx(i, j)] {
@@ -442,9 +445,7 @@ fn start_hull(tr: &Tracer<'_>, tile: &mut TileRays, b: Rect) -> Option<IBox> {
         return None;
     }
     if hi - lo <= tr.cam.spacing(hi) {
-        let xs = ((b.x0 + tile.x0) as f64 + 0.5, (b.x1 + tile.x0) as f64 - 0.5);
-        let ys = ((b.y0 + tile.y0) as f64 + 0.5, (b.y1 + tile.y0) as f64 - 0.5);
-        return Some(tr.cam.corners(xs, ys).hull(Interval::new(lo, hi)));
+        return Some(corners.hull(Interval::new(lo, hi)));
     }
     if tile.starts.is_empty() {
         tile.starts = (tile.rays.iter().zip(&tile.slabs))
