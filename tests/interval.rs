@@ -57,6 +57,10 @@ mod oracle {
         inari::Interval::try_from((i.lo, i.hi)).expect("valid interval")
     }
 
+    fn from_inari(i: inari::Interval) -> Interval {
+        Interval::new(i.inf(), i.sup())
+    }
+
     fn down2(v: f64) -> f64 {
         v.next_down().next_down()
     }
@@ -103,6 +107,11 @@ mod oracle {
             assert_tight(a.square(), ia.sqr(), &format!("square {a:?}"));
             assert_tight(a.abs(), ia.abs(), &format!("abs {a:?}"));
             assert_tight(a.neg(), -ia, &format!("neg {a:?}"));
+            // The steps are exact: equal to inari's tightest result.
+            assert_eq!(a.floor(), from_inari(ia.floor()), "floor {a:?}");
+            assert_eq!(a.ceil(), from_inari(ia.ceil()), "ceil {a:?}");
+            assert_eq!(a.round(), from_inari(ia.round()), "round {a:?}");
+            assert_eq!(a.sign(), from_inari(ia.sign()), "sign {a:?}");
         }
     }
 }
@@ -150,6 +159,25 @@ proptest! {
             let v = point_powi(x, n);
             prop_assert!(!x.is_finite() || !v.is_finite() || r.contains(v),
                 "powi {a:?} {n} = {r:?} misses {v:e} at {x:e}");
+        }
+    }
+
+    #[test]
+    fn tan_and_mod_near_their_jumps(k in -1_000_000i64..1_000_000, d in 1e-12..1e-3f64, t in 0.0..=1.0f64, c in prop_oneof![Just(1.0f64), Just(0.1), Just(2.5), Just(-3.0)]) {
+        // Intervals ending just short of, or reaching past, a pole of tan
+        // and a multiple of the period of mod.
+        let pole = k as f64 * std::f64::consts::PI + std::f64::consts::FRAC_PI_2;
+        let edge = k as f64 * c;
+        for (lo, hi) in [(pole - 2.0 * d, pole - d), (pole - d, pole + d), (edge - d, edge + d), (edge, edge + d), (edge - d, edge)] {
+            let a = Interval::new(lo, hi);
+            let x = lo + (hi - lo) * t;
+            for &x in &[lo, hi, x] {
+                let v = libm::tan(x);
+                prop_assert!(a.tan().contains(v), "tan {a:?} = {:?} misses {v:e} at {x:e}", a.tan());
+                let m = x.rem_euclid(c);
+                let r = a.rem_euclid(Interval::point(c));
+                prop_assert!(r.contains(m), "mod {a:?} {c} = {r:?} misses {m:e} at {x:e}");
+            }
         }
     }
 
@@ -230,8 +258,24 @@ fn transcendentals_are_tight_on_points() {
     };
     for &x in &[0.1, 0.5, 1.0, 2.0, 3.0, 10.0, 700.0, 1e-5, 123.456] {
         let p = Interval::point(x);
-        for op in [UnaryOp::Exp, UnaryOp::Ln, UnaryOp::Sin, UnaryOp::Cos] {
-            within(interval_unary(op, p), &format!("{op:?}({x})"));
+        for op in [
+            UnaryOp::Exp,
+            UnaryOp::Ln,
+            UnaryOp::Sin,
+            UnaryOp::Cos,
+            UnaryOp::Tan,
+            UnaryOp::Atan,
+            UnaryOp::Sinh,
+            UnaryOp::Cosh,
+            UnaryOp::Tanh,
+        ] {
+            if x < 700.0 || op != UnaryOp::Tanh {
+                within(interval_unary(op, p), &format!("{op:?}({x})"));
+            }
+        }
+        if x <= 1.0 {
+            within(p.asin(), &format!("asin({x})"));
+            within(p.acos(), &format!("acos({x})"));
         }
         for &y in &[0.3, 1.5, -2.0] {
             let q = Interval::point(y);
@@ -305,6 +349,15 @@ proptest! {
         check(p.sin(), x.sin(), &format!("sin {x:e}"));
         check(p.cos(), x.cos(), &format!("cos {x:e}"));
         check(p.atan2(q), x.atan2(y), &format!("atan2 {x:e} {y:e}"));
+        check(p.tan(), x.tan(), &format!("tan {x:e}"));
+        check(p.atan(), x.atan(), &format!("atan {x:e}"));
+        check(p.sinh(), x.sinh(), &format!("sinh {x:e}"));
+        check(p.cosh(), x.cosh(), &format!("cosh {x:e}"));
+        check(p.tanh(), x.tanh(), &format!("tanh {x:e}"));
+        let u = x.sin();
+        check(Interval::point(u).asin(), u.asin(), &format!("asin {u:e}"));
+        check(Interval::point(u).acos(), u.acos(), &format!("acos {u:e}"));
+        check(p.rem_euclid(q), x.rem_euclid(y), &format!("mod {x:e} {y:e}"));
         let ax = x.abs();
         check(Interval::point(ax).ln(), ax.ln(), &format!("ln {ax:e}"));
         if (ax * y.abs()) < 300.0 {

@@ -57,6 +57,9 @@ impl Arith<f64> for Reference {
     fn keep_zero(&mut self, t: f64, x: f64) -> f64 {
         if t == 0.0 { 0.0 } else { x }
     }
+    fn step_grad(&mut self, _: UnaryOp, _: f64, _: f64) -> f64 {
+        0.0
+    }
     fn abs_grad(&mut self, a: f64, x: f64) -> f64 {
         let s = if a > 0.0 {
             1.0
@@ -134,6 +137,15 @@ impl Arith<Interval> for Reference {
             Interval::new(-1.0, 1.0)
         };
         s.mul(x)
+    }
+    fn step_grad(&mut self, op: UnaryOp, a: Interval, x: Interval) -> Interval {
+        if a.is_empty() || x.is_empty() {
+            Interval::EMPTY
+        } else if (x.lo == 0.0 && x.hi == 0.0) || !a.may_jump(|v| point_unary(op, v)) {
+            Interval::point(0.0)
+        } else {
+            Interval::ENTIRE
+        }
     }
     fn min_grad(&mut self, a: Interval, b: Interval, x: Interval, y: Interval) -> Interval {
         // The op returns a's value at every point of the box when a.hi < b.lo.

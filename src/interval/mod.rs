@@ -422,5 +422,8 @@ impl Interval {
 }
 
 pub mod boxes;
+mod elementary;
+mod steps;
 mod transcendental;
+pub use steps::{rem_euclid, sign};
 pub use transcendental::{widen_down, widen_up};

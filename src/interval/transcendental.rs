@@ -32,16 +32,16 @@ pub fn widen_up(v: f64) -> f64 {
 /// Past this magnitude sin and cos give [-1, 1]: the reduction of the ends
 /// by π below would lose the parity of k, and such boxes carry no
 /// useful information anyway.
-const TRIG_HUGE: f64 = 1e15;
+pub(super) const TRIG_HUGE: f64 = 1e15;
 
 /// Lower bound of π's upper neighbour: `PI` (the f64 nearest π) is below π.
-const PI_UP: f64 = 3.141_592_653_589_793_6;
+pub(super) const PI_UP: f64 = 3.141_592_653_589_793_6;
 
 /// Whether `[a, b]` holds a point `(k + offset)·π` with k even, and one
 /// with k odd (the maxima and minima of cos for offset 0, of sin for offset
 /// 1/2). Possibly over-approximated (an extra k only widens the result toward ±1, which is
 /// sound; a missing k would not be). Returns `(has_even, has_odd)`.
-fn extrema_in(a: f64, b: f64, offset_halves: f64) -> (bool, bool) {
+pub(super) fn extrema_in(a: f64, b: f64, offset_halves: f64) -> (bool, bool) {
     // t = x/π - offset, computed in floating point: the relative error of
     // FRAC_1_PI, of the product and of the subtraction is below 3 ulps of
     // the magnitudes involved, so a slack of 1e-15·(|x/π| + 1) covers it.

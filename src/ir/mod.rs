@@ -98,6 +98,88 @@ pub enum UnaryOp {
     Sin,
     /// cos(a), radians.
     Cos,
+    /// tan(a), radians; unbounded near its poles.
+    Tan,
+    /// asin(a) in [-π/2, π/2]; NaN outside [-1, 1].
+    Asin,
+    /// acos(a) in [0, π]; NaN outside [-1, 1].
+    Acos,
+    /// atan(a) in (-π/2, π/2).
+    Atan,
+    /// sinh(a)
+    Sinh,
+    /// cosh(a)
+    Cosh,
+    /// tanh(a)
+    Tanh,
+    /// The largest integer not above a (exact).
+    Floor,
+    /// The smallest integer not below a (exact).
+    Ceil,
+    /// The nearest integer, halves away from zero (exact).
+    Round,
+    /// -1, 0 or 1 as a is negative, zero (either sign) or positive; NaN
+    /// for NaN.
+    Sign,
+}
+
+impl UnaryOp {
+    /// Every one-operand op, in declaration order.
+    pub const ALL: [UnaryOp; 19] = [
+        UnaryOp::Neg,
+        UnaryOp::Abs,
+        UnaryOp::Square,
+        UnaryOp::Sqrt,
+        UnaryOp::Exp,
+        UnaryOp::Ln,
+        UnaryOp::Sin,
+        UnaryOp::Cos,
+        UnaryOp::Tan,
+        UnaryOp::Asin,
+        UnaryOp::Acos,
+        UnaryOp::Atan,
+        UnaryOp::Sinh,
+        UnaryOp::Cosh,
+        UnaryOp::Tanh,
+        UnaryOp::Floor,
+        UnaryOp::Ceil,
+        UnaryOp::Round,
+        UnaryOp::Sign,
+    ];
+
+    /// The op's mnemonic in the printed IR (and the `.vm` format).
+    pub fn name(self) -> &'static str {
+        match self {
+            UnaryOp::Neg => "neg",
+            UnaryOp::Abs => "abs",
+            UnaryOp::Square => "square",
+            UnaryOp::Sqrt => "sqrt",
+            UnaryOp::Exp => "exp",
+            UnaryOp::Ln => "ln",
+            UnaryOp::Sin => "sin",
+            UnaryOp::Cos => "cos",
+            UnaryOp::Tan => "tan",
+            UnaryOp::Asin => "asin",
+            UnaryOp::Acos => "acos",
+            UnaryOp::Atan => "atan",
+            UnaryOp::Sinh => "sinh",
+            UnaryOp::Cosh => "cosh",
+            UnaryOp::Tanh => "tanh",
+            UnaryOp::Floor => "floor",
+            UnaryOp::Ceil => "ceil",
+            UnaryOp::Round => "round",
+            UnaryOp::Sign => "sign",
+        }
+    }
+
+    /// Whether the op is piecewise constant: its derivative is 0 between
+    /// jumps, and unbounded over a box that may hold one.
+    pub fn is_step(self) -> bool {
+        matches!(
+            self,
+            UnaryOp::Floor | UnaryOp::Ceil | UnaryOp::Round | UnaryOp::Sign
+        )
+    }
 }
 
 /// Ops of two operands.
@@ -119,6 +201,40 @@ pub enum BinaryOp {
     Atan2,
     /// a^b for real b, defined as exp(b ln a): NaN for a < 0.
     Pow,
+    /// The least non-negative remainder of a divided by b (as Fidget's
+    /// `mod` and `f64::rem_euclid`): in [0, |b|], NaN where b = 0 or a is
+    /// infinite.
+    Mod,
+}
+
+impl BinaryOp {
+    /// Every two-operand op, in declaration order.
+    pub const ALL: [BinaryOp; 9] = [
+        BinaryOp::Add,
+        BinaryOp::Sub,
+        BinaryOp::Mul,
+        BinaryOp::Div,
+        BinaryOp::Min,
+        BinaryOp::Max,
+        BinaryOp::Atan2,
+        BinaryOp::Pow,
+        BinaryOp::Mod,
+    ];
+
+    /// The op's mnemonic in the printed IR (and the `.vm` format).
+    pub fn name(self) -> &'static str {
+        match self {
+            BinaryOp::Add => "add",
+            BinaryOp::Sub => "sub",
+            BinaryOp::Mul => "mul",
+            BinaryOp::Div => "div",
+            BinaryOp::Min => "min",
+            BinaryOp::Max => "max",
+            BinaryOp::Atan2 => "atan2",
+            BinaryOp::Pow => "pow",
+            BinaryOp::Mod => "mod",
+        }
+    }
 }
 
 impl BinaryOp {
@@ -177,26 +293,8 @@ impl Op {
             Op::Var(_) => "var",
             Op::Const(_) => "const",
             Op::Powi(..) => "powi",
-            Op::Unary(u, _) => match u {
-                UnaryOp::Neg => "neg",
-                UnaryOp::Abs => "abs",
-                UnaryOp::Square => "square",
-                UnaryOp::Sqrt => "sqrt",
-                UnaryOp::Exp => "exp",
-                UnaryOp::Ln => "ln",
-                UnaryOp::Sin => "sin",
-                UnaryOp::Cos => "cos",
-            },
-            Op::Binary(b, ..) => match b {
-                BinaryOp::Add => "add",
-                BinaryOp::Sub => "sub",
-                BinaryOp::Mul => "mul",
-                BinaryOp::Div => "div",
-                BinaryOp::Min => "min",
-                BinaryOp::Max => "max",
-                BinaryOp::Atan2 => "atan2",
-                BinaryOp::Pow => "pow",
-            },
+            Op::Unary(u, _) => u.name(),
+            Op::Binary(b, ..) => b.name(),
         }
     }
 }

@@ -102,11 +102,12 @@ pub fn const_facts(c: f64) -> Facts {
 pub fn unary_facts(u: UnaryOp, (va, fa): (Interval, Facts), value: Interval) -> Facts {
     let nonneg = matches!(
         u,
-        UnaryOp::Square | UnaryOp::Abs | UnaryOp::Sqrt | UnaryOp::Exp
+        UnaryOp::Square | UnaryOp::Abs | UnaryOp::Sqrt | UnaryOp::Exp | UnaryOp::Cosh
     );
     let domain = match u {
         UnaryOp::Sqrt => va.lo >= 0.0 || fa.nonneg,
         UnaryOp::Ln => va.lo > 0.0,
+        UnaryOp::Asin | UnaryOp::Acos => va.lo >= -1.0 && va.hi <= 1.0,
         _ => true,
     };
     Facts {
@@ -128,10 +129,12 @@ pub fn binary_facts(
         BinaryOp::Add | BinaryOp::Mul | BinaryOp::Div | BinaryOp::Min | BinaryOp::Max => {
             fa.nonneg && fb.nonneg
         }
+        BinaryOp::Mod => true,
         _ => false,
     };
     let (domain, signed_zero_pole) = match o {
         BinaryOp::Div => (vb.lo > 0.0 || vb.hi < 0.0, zero_in(vb)),
+        BinaryOp::Mod => (vb.lo > 0.0 || vb.hi < 0.0, false),
         BinaryOp::Pow => (va.lo > 0.0, va.lo <= 0.0),
         _ => (true, false),
     };

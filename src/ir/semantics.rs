@@ -49,7 +49,7 @@
 //! `1/a` over the non-negative part of `a`, and so on).
 
 use super::{BinaryOp, Op, UnaryOp};
-use crate::interval::{Interval, max_nan, min_nan, powi_point};
+use crate::interval::{Interval, max_nan, min_nan, powi_point, rem_euclid, sign};
 
 /// A point value and its gradient (∂f/∂x, ∂f/∂y, ∂f/∂z).
 #[derive(Copy, Clone, Debug, PartialEq)]
@@ -82,6 +82,17 @@ pub fn point_unary(op: UnaryOp, a: f64) -> f64 {
         UnaryOp::Ln => libm::log(a),
         UnaryOp::Sin => libm::sin(a),
         UnaryOp::Cos => libm::cos(a),
+        UnaryOp::Tan => libm::tan(a),
+        UnaryOp::Asin => libm::asin(a),
+        UnaryOp::Acos => libm::acos(a),
+        UnaryOp::Atan => libm::atan(a),
+        UnaryOp::Sinh => libm::sinh(a),
+        UnaryOp::Cosh => libm::cosh(a),
+        UnaryOp::Tanh => libm::tanh(a),
+        UnaryOp::Floor => a.floor(),
+        UnaryOp::Ceil => a.ceil(),
+        UnaryOp::Round => a.round(),
+        UnaryOp::Sign => sign(a),
     }
 }
 
@@ -105,6 +116,7 @@ pub fn point_binary(op: BinaryOp, a: f64, b: f64) -> f64 {
                 libm::pow(a + 0.0, b)
             }
         }
+        BinaryOp::Mod => rem_euclid(a, b),
     }
 }
 
@@ -124,6 +136,17 @@ pub fn interval_unary(op: UnaryOp, a: Interval) -> Interval {
         UnaryOp::Ln => a.ln(),
         UnaryOp::Sin => a.sin(),
         UnaryOp::Cos => a.cos(),
+        UnaryOp::Tan => a.tan(),
+        UnaryOp::Asin => a.asin(),
+        UnaryOp::Acos => a.acos(),
+        UnaryOp::Atan => a.atan(),
+        UnaryOp::Sinh => a.sinh(),
+        UnaryOp::Cosh => a.cosh(),
+        UnaryOp::Tanh => a.tanh(),
+        UnaryOp::Floor => a.floor(),
+        UnaryOp::Ceil => a.ceil(),
+        UnaryOp::Round => a.round(),
+        UnaryOp::Sign => a.sign(),
     }
 }
 
@@ -138,6 +161,7 @@ pub fn interval_binary(op: BinaryOp, a: Interval, b: Interval) -> Interval {
         BinaryOp::Max => a.max(b),
         BinaryOp::Atan2 => a.atan2(b),
         BinaryOp::Pow => a.pow(b),
+        BinaryOp::Mod => a.rem_euclid(b),
     }
 }
 
@@ -191,6 +215,15 @@ pub trait Arith<N: Copy> {
     /// set times `x`, rounded); the JIT takes `x` at 0 and returns `x` or
     /// `-x` exactly (interval: the hull of both where the sign is unsure).
     fn abs_grad(&mut self, a: N, x: N) -> N;
+    /// The partial of a piecewise-constant op (`floor`, `ceil`, `round`,
+    /// `sign`) of `a`, whose partial is `x`: 0 where the op cannot jump.
+    /// Points: 0 (the derivative between jumps). Intervals: `[0, 0]` when
+    /// the op is constant over the operand interval or `x` is `[0, 0]`
+    /// (the operand does not move along this axis), else the whole line,
+    /// since a jump has no finite bound on how fast f changes; the
+    /// inclusion test and interval Newton then cannot treat f as smooth
+    /// across it (as at atan2's cut).
+    fn step_grad(&mut self, op: UnaryOp, a: N, x: N) -> N;
     /// Derivative of `min(a, b)` given the partials `x`, `y`: that of the
     /// operand min returns (interval: of the one it returns on the whole
     /// box, else the hull). The interpreter gives NaN (EMPTY) where an
@@ -326,6 +359,43 @@ pub fn grad_unary<N: Copy, C: Arith<N> + ?Sized>(
             let s = cx.unary(UnaryOp::Sin, a);
             cx.neg(s)
         }),
+        // 1 + tan²
+        UnaryOp::Tan => scale(cx, da, |cx| {
+            let one = cx.konst(1.0);
+            let t2 = cx.unary(UnaryOp::Square, v);
+            cx.add(one, t2)
+        }),
+        // ±1 / sqrt(1 - a²)
+        UnaryOp::Asin | UnaryOp::Acos => {
+            let one = cx.konst(1.0);
+            let a2 = cx.unary(UnaryOp::Square, a);
+            let r = cx.sub(one, a2);
+            let q = cx.unary(UnaryOp::Sqrt, r);
+            let d = cx.chain_quot(1.0, q, da);
+            if op == UnaryOp::Acos {
+                map_partials(cx, d, |cx, x| cx.neg(x))
+            } else {
+                d
+            }
+        }
+        // 1 / (1 + a²)
+        UnaryOp::Atan => {
+            let one = cx.konst(1.0);
+            let a2 = cx.unary(UnaryOp::Square, a);
+            let q = cx.add(one, a2);
+            cx.chain_quot(1.0, q, da)
+        }
+        UnaryOp::Sinh => scale(cx, da, |cx| cx.unary(UnaryOp::Cosh, a)),
+        UnaryOp::Cosh => scale(cx, da, |cx| cx.unary(UnaryOp::Sinh, a)),
+        // 1 - tanh²
+        UnaryOp::Tanh => scale(cx, da, |cx| {
+            let one = cx.konst(1.0);
+            let t2 = cx.unary(UnaryOp::Square, v);
+            cx.sub(one, t2)
+        }),
+        UnaryOp::Floor | UnaryOp::Ceil | UnaryOp::Round | UnaryOp::Sign => {
+            map_partials(cx, da, |cx, x| cx.step_grad(op, a, x))
+        }
     };
     (v, d)
 }
@@ -384,8 +454,28 @@ pub fn grad_binary<N: Copy, C: Arith<N> + ?Sized>(
             })
         }
         BinaryOp::Pow => cx.pow_partials(a, b, v, da, db),
+        BinaryOp::Mod => mod_partials(cx, (a, da), (b, db)),
     };
     (v, d)
+}
+
+/// The partials of `mod(a, b)` by the chain rule of the identity
+/// `mod(a, b) = a - m·floor(a / m)` with `m = |b|`: where no jump of the
+/// floor is possible this is `da - floor(a/m)·dm`, and where one is, the
+/// floor's [`Arith::step_grad`] makes the partial unbounded.
+fn mod_partials<N: Copy, C: Arith<N> + ?Sized>(
+    cx: &mut C,
+    (a, da): Dual<N>,
+    (b, db): Dual<N>,
+) -> Partials<N> {
+    if da.iter().chain(&db).all(Option::is_none) {
+        return [None; 3];
+    }
+    let (m, dm) = grad_unary(cx, UnaryOp::Abs, (b, db));
+    let (q, dq) = grad_binary(cx, BinaryOp::Div, (a, da), (m, dm));
+    let (k, dk) = grad_unary(cx, UnaryOp::Floor, (q, dq));
+    let (_, dmk) = grad_binary(cx, BinaryOp::Mul, (m, dm), (k, dk));
+    zip_partials(cx, da, dmk, difference)
 }
 
 /// `n·a^(n-1)`, the factor of `powi(a, n)`'s derivative.

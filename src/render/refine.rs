@@ -350,7 +350,7 @@ mod tests {
     fn batched_refinement_gives_single_refinements_bits() {
         let mut rng = Rng::new(17);
         let mut refined = 0;
-        for seed in 0..40 {
+        for seed in 0..80 {
             let evals: Vec<Arc<dyn Evaluator>> = (0..2)
                 .map(|k| {
                     Arc::new(Interpreter::new(random_function(2 * seed + k, 6)))

@@ -21,7 +21,7 @@ use ibeam::eval::{Evaluator, Grad};
 use ibeam::interval::Interval;
 use ibeam::ir::random::{Rng, random_function};
 use ibeam::ir::semantics::{run_interval, run_point};
-use ibeam::ir::{Function, Op, UnaryOp};
+use ibeam::ir::{BinaryOp, Function, Op, UnaryOp};
 
 use super::*;
 
@@ -244,6 +244,16 @@ pub fn check_gradient_at(e: &dyn Evaluator, p: [f64; 3], what: &str) -> usize {
     compared
 }
 
+/// Whether `f` has a piecewise-constant op or `mod`, whose jumps finite
+/// differences may straddle.
+pub fn has_jumps(f: &Function) -> bool {
+    f.ops.iter().any(|op| match op {
+        Op::Unary(u, _) => u.is_step(),
+        Op::Binary(o, ..) => *o == BinaryOp::Mod,
+        _ => false,
+    })
+}
+
 /// Gradients of every single-op function agree with central finite
 /// differences at smooth points, and lie in the interval gradients of small
 /// boxes around them.
@@ -253,8 +263,13 @@ pub fn check_grad_ops(make: Make) {
         let e = make(&f);
         let mut compared = 0;
         for _ in 0..40 {
-            // Smooth region of every op: positive, away from 0 and from ties.
-            let x = rng.range(0.3, 3.0);
+            // Smooth region of every op: positive, away from 0 and from
+            // ties; inside (-1, 1) for the inverse sine and cosine.
+            let x = if name == "Asin" || name == "Acos" {
+                rng.range(0.05, 0.95)
+            } else {
+                rng.range(0.3, 3.0)
+            };
             let y = x + rng.pick(&[-1.0, 1.0]) * rng.range(0.2, 2.0);
             let p = [x, y.max(0.1), 0.7];
             compared += check_gradient_at(e.as_ref(), p, &name);
@@ -276,6 +291,11 @@ pub fn check_interval_grad_contains(e: &dyn Evaluator, p: [f64; 3], r: f64, what
     let mut rng = Rng::new(p[0].to_bits());
     for q in box_points(b, &mut rng, 4) {
         let g = e.point_grad(q);
+        // Outside f's domain its partials mean nothing (a partial that is
+        // exactly 0 by the chain rule survives a NaN value).
+        if g.v.is_nan() {
+            continue;
+        }
         if g.v.is_finite() {
             assert!(
                 ig.v.contains(g.v),
@@ -376,9 +396,14 @@ pub fn check_random_functions(make: Make, seeds: std::ops::Range<u64>) {
                 rng.range(-2.0, 2.0),
                 rng.range(-2.0, 2.0),
             ];
-            if ref_point_all(&f, p)
-                .iter()
-                .all(|v| v.is_finite() && v.abs() < 1e6)
+            // Finite differences cannot see the derivative of a function
+            // with jumps finer than their step (mod by a subnormal period
+            // is 0 in floating point, its derivative 1): such functions
+            // are checked against the reference rules above instead.
+            if !has_jumps(&f)
+                && ref_point_all(&f, p)
+                    .iter()
+                    .all(|v| v.is_finite() && v.abs() < 1e6)
             {
                 compared += check_gradient_at(e.as_ref(), p, &format!("seed {seed}"));
             }

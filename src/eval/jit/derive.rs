@@ -9,6 +9,7 @@ use cranelift_codegen::ir::{InstBuilder, Value};
 
 use super::emit::{Emitter, Iv};
 use super::lower::{Spill, iv_binary, iv_unary, point_binary, point_unary, sweep};
+use super::shims::Shim;
 use crate::ir::semantics::{
     Arith, Dual, Partials, grad_binary, grad_powi, grad_unary, pow_partials_log, powi_factor,
 };
@@ -41,6 +42,9 @@ impl Arith<Value> for Emitter<'_, '_> {
     }
     fn powi(&mut self, a: Value, n: i64) -> Value {
         self.powi_point(a, n)
+    }
+    fn step_grad(&mut self, _: UnaryOp, _: Value, _: Value) -> Value {
+        self.c(0.0)
     }
     /// `x` where a ≥ 0 (and at ±0 and NaN), `-x` where a < 0.
     fn abs_grad(&mut self, a: Value, x: Value) -> Value {
@@ -103,6 +107,11 @@ impl Arith<Iv> for Emitter<'_, '_> {
     fn powi(&mut self, a: Iv, n: i64) -> Iv {
         self.iv_powi(a, n)
     }
+    /// The interpreter's rule, called out: jumps are rare and need the
+    /// op's point rule at both ends of the operand.
+    fn step_grad(&mut self, op: UnaryOp, a: Iv, x: Iv) -> Iv {
+        self.call_iv_binary(Shim::IntervalStepGrad(op), a, x)
+    }
     fn abs_grad(&mut self, a: Iv, x: Iv) -> Iv {
         // The sign of a is certain only when a.lo >= 0 (lane -lo <= 0) or
         // a.hi < 0.
@@ -150,6 +159,10 @@ impl Arith<Iv> for Emitter<'_, '_> {
     fn powi_factor(&mut self, a: Iv, n: i64) -> Option<Iv> {
         (n != 1).then(|| powi_factor(self, a, n))
     }
+    /// The log form, with `da / a` taken as 0 where the partial `da` is
+    /// `[0, 0]`: at a base that is exactly 0 the quotient is 0/0, and the
+    /// EMPTY it gives would claim f undefined where it is not (a floor or
+    /// a constant can make such a base).
     fn pow_partials(
         &mut self,
         a: Iv,
@@ -158,7 +171,31 @@ impl Arith<Iv> for Emitter<'_, '_> {
         da: Partials<Iv>,
         db: Partials<Iv>,
     ) -> Partials<Iv> {
-        pow_partials_log(self, a, b, v, da, db)
+        let mut d = [None; 3];
+        for k in 0..3 {
+            let l = db[k].map(|y| {
+                let ln = iv_unary(self, UnaryOp::Ln, a);
+                self.iv_mul(y, ln, None)
+            });
+            let r = da[k].map(|x| {
+                let (lo, hi) = bounds(self, x);
+                let z = self.c(0.0);
+                let lo0 = self.fcmp(FloatCC::Equal, lo, z);
+                let hi0 = self.fcmp(FloatCC::Equal, hi, z);
+                let is0 = self.b.ins().band(lo0, hi0);
+                let q = self.iv_div(x, a);
+                let zero = self.iv_const(0.0);
+                let q = self.iv_select(is0, zero, q);
+                self.iv_mul(b, q, None)
+            });
+            let s = match (l, r) {
+                (Some(l), Some(r)) => self.iv_add(l, r),
+                (Some(t), None) | (None, Some(t)) => t,
+                (None, None) => continue,
+            };
+            d[k] = Some(self.iv_mul(v, s, None));
+        }
+        d
     }
 }
 

@@ -41,7 +41,7 @@ pub(crate) struct ShimRefs(pub [FuncRef; SHIM_COUNT]);
 impl ShimRefs {
     /// The imported reference of `shim`.
     pub fn get(&self, shim: Shim) -> FuncRef {
-        self.0[shim as usize]
+        self.0[shim.index()]
     }
 }
 

@@ -210,10 +210,7 @@ pub(crate) fn point_unary(e: &mut Emitter, u: UnaryOp, a: Value) -> Value {
         UnaryOp::Abs => e.b.ins().fabs(a),
         UnaryOp::Square => e.mul(a, a),
         UnaryOp::Sqrt => e.b.ins().sqrt(a),
-        UnaryOp::Exp | UnaryOp::Ln | UnaryOp::Sin | UnaryOp::Cos => {
-            let (shim, _) = Shim::of_unary(u).expect("transcendental");
-            e.call_point_unary(shim, a)
-        }
+        _ => e.call_point_unary(Shim::PointUnary(u), a),
     }
 }
 
@@ -225,9 +222,8 @@ pub(crate) fn point_binary(e: &mut Emitter, op: BinaryOp, a: Value, b: Value) ->
         BinaryOp::Div => e.div(a, b),
         BinaryOp::Min => e.min_nan(a, b),
         BinaryOp::Max => e.max_nan(a, b),
-        BinaryOp::Atan2 | BinaryOp::Pow => {
-            let (shim, _) = Shim::of_binary(op).expect("transcendental");
-            e.call_point_binary(shim, a, b)
+        BinaryOp::Atan2 | BinaryOp::Pow | BinaryOp::Mod => {
+            e.call_point_binary(Shim::PointBinary(op), a, b)
         }
     }
 }
@@ -265,10 +261,7 @@ pub(crate) fn iv_unary(e: &mut Emitter, u: UnaryOp, a: Iv) -> Iv {
         UnaryOp::Abs => e.iv_abs(a),
         UnaryOp::Square => e.iv_square(a),
         UnaryOp::Sqrt => e.iv_sqrt(a),
-        UnaryOp::Exp | UnaryOp::Ln | UnaryOp::Sin | UnaryOp::Cos => {
-            let (_, shim) = Shim::of_unary(u).expect("transcendental");
-            e.call_iv_unary(shim, a)
-        }
+        _ => e.call_iv_unary(Shim::IntervalUnary(u), a),
     }
 }
 
@@ -280,9 +273,8 @@ pub(crate) fn iv_binary(e: &mut Emitter, op: BinaryOp, a: Iv, b: Iv) -> Iv {
         BinaryOp::Div => e.iv_div(a, b),
         BinaryOp::Min => e.iv_min(a, b),
         BinaryOp::Max => e.iv_max(a, b),
-        BinaryOp::Atan2 | BinaryOp::Pow => {
-            let (_, shim) = Shim::of_binary(op).expect("transcendental");
-            e.call_iv_binary(shim, a, b)
+        BinaryOp::Atan2 | BinaryOp::Pow | BinaryOp::Mod => {
+            e.call_iv_binary(Shim::IntervalBinary(op), a, b)
         }
     }
 }

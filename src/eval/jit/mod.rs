@@ -196,13 +196,13 @@ fn new_module() -> Result<(JITModule, ShimIds), JitError> {
     let isa = isa()?;
     let cc = isa.default_call_conv();
     let mut jb = JITBuilder::with_isa(isa, default_libcall_names());
-    for shim in Shim::ALL {
+    for shim in Shim::all() {
         let (name, _, ptr) = shim.entry();
         jb.symbol(name, ptr);
     }
     let mut module = JITModule::new(jb);
     let mut ids = Vec::with_capacity(SHIM_COUNT);
-    for shim in Shim::ALL {
+    for shim in Shim::all() {
         let (name, sig, _) = shim.entry();
         let (params, rets) = sig.arity();
         let mut s = ir::Signature::new(cc);
@@ -211,8 +211,8 @@ fn new_module() -> Result<(JITModule, ShimIds), JitError> {
         s.returns
             .extend((0..rets).map(|_| ir::AbiParam::new(types::F64)));
         let id = module
-            .declare_function(name, Linkage::Import, &s)
-            .map_err(|e| JitError::new(name, e))?;
+            .declare_function(&name, Linkage::Import, &s)
+            .map_err(|e| JitError::new(&name, e))?;
         ids.push(id);
     }
     let ids = ids

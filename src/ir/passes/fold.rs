@@ -94,6 +94,13 @@ fn fold(op: Op, b: &Builder) -> Option<f64> {
                 UnaryOp::Ln => (a == 1.0).then_some(r),
                 UnaryOp::Sin => (a == 0.0).then_some(r),
                 UnaryOp::Cos => (a == 0.0).then_some(r),
+                // Odd functions through the origin are exact there.
+                UnaryOp::Tan | UnaryOp::Asin | UnaryOp::Atan | UnaryOp::Sinh | UnaryOp::Tanh => {
+                    (a == 0.0).then_some(r)
+                }
+                UnaryOp::Acos => (a == 1.0).then_some(r),
+                UnaryOp::Cosh => (a == 0.0).then_some(r),
+                UnaryOp::Floor | UnaryOp::Ceil | UnaryOp::Round | UnaryOp::Sign => Some(r),
             }
         }
         Op::Binary(o, x, y) => {
@@ -106,6 +113,9 @@ fn fold(op: Op, b: &Builder) -> Option<f64> {
                 BinaryOp::Min | BinaryOp::Max => Some(point_binary(o, x, y)),
                 BinaryOp::Atan2 => (x == 0.0 && y > 0.0).then_some(point_binary(o, x, y)),
                 BinaryOp::Pow => (x >= 0.0 && y == 0.0).then_some(1.0),
+                // fmod is exact; only the step back into [0, |y|) for a
+                // negative x rounds.
+                BinaryOp::Mod => (x >= 0.0).then_some(point_binary(o, x, y)),
             }
         }
         Op::Powi(a, n) => exact_powi(constant(b, a)?, n),
