@@ -24,6 +24,8 @@ enum Command {
     Render(cli::render::Args),
     /// Run a benchmark and print its table (baseline in the same run).
     Bench(cli::bench::Args),
+    /// Write a scene's objects in another format (`--vm`: Fidget's text).
+    Export(cli::export::Args),
 }
 
 // Deeply nested input is rejected by the parser, but lowering and
@@ -40,6 +42,7 @@ fn main() -> ExitCode {
             Command::Eval(a) => cli::eval::run(a),
             Command::Render(a) => cli::render::run(a),
             Command::Bench(a) => cli::bench::run(a),
+            Command::Export(a) => cli::export::run(a),
         });
     let result = match worker.map(|h| h.join()) {
         Ok(Ok(r)) => r,

@@ -5,6 +5,7 @@
 pub mod accuracy;
 pub mod bench;
 pub mod eval;
+pub mod export;
 pub mod ir;
 pub mod png_stream;
 pub mod render;

@@ -5,10 +5,10 @@
 //! name lookup, the arity check, the "did you mean" hints, the reserved
 //! names and the lowering all read the same table and cannot drift apart.
 
-use crate::ir::{BinaryOp, UnaryOp, ValueId};
+use crate::ir::{BinaryOp, UnaryOp};
 use crate::lang::ast::Expr;
 use crate::lang::diag::Diag;
-use crate::lang::lower::{Coord, Ctx, Env, Lowerer, Val, int_exponent};
+use crate::lang::lower::{Ctx, Env, Lowerer, Val, int_exponent};
 use std::fmt;
 
 /// How many arguments a builtin (or a definition) takes.
@@ -86,6 +86,58 @@ pub enum Builtin {
     RotateY,
     /// `rotate_z(s, degrees)`
     RotateZ,
+    /// `tan(a)`
+    Tan,
+    /// `asin(a)`
+    Asin,
+    /// `acos(a)`
+    Acos,
+    /// `atan(a)`
+    Atan,
+    /// `sinh(a)`
+    Sinh,
+    /// `cosh(a)`
+    Cosh,
+    /// `tanh(a)`
+    Tanh,
+    /// `floor(a)`
+    Floor,
+    /// `ceil(a)`
+    Ceil,
+    /// `round(a)`: halves away from zero.
+    Round,
+    /// `fract(a)` = a - floor(a).
+    Fract,
+    /// `sign(a)`
+    Sign,
+    /// `mod(a, b)`: the least non-negative remainder.
+    Mod,
+    /// `clamp(a, lo, hi)`
+    Clamp,
+    /// `mix(a, b, t)` = a + (b - a)·t.
+    Mix,
+    /// `smoothstep(e0, e1, a)`
+    Smoothstep,
+    /// `blend_intersect(a, b, k)`: a smooth intersection.
+    BlendIntersect,
+    /// `blend_difference(a, b, k)`: a smooth difference.
+    BlendDifference,
+    /// `shell(s, t)` = |s| - t.
+    Shell,
+    /// `offset(s, r)` = s - r.
+    Offset,
+    /// `mirror_x(s)`: s at (|x|, y, z).
+    MirrorX,
+    /// `mirror_y(s)`
+    MirrorY,
+    /// `mirror_z(s)`
+    MirrorZ,
+    /// `repeat(s, px, py, pz)`: infinite domain repetition.
+    Repeat,
+    /// `rotate(s, ax, ay, az, degrees)`: about any axis through the origin.
+    Rotate,
+    /// `scale_xyz(s, kx, ky, kz)`: non-uniform scaling.
+    ScaleXyz,
 }
 
 /// What a builtin lowers to.
@@ -110,25 +162,51 @@ enum Form {
     /// The shape evaluated at the point rotated back, in the plane of the
     /// coordinates with these indices.
     Rotate(usize, usize),
+    /// `a - floor(a)`, as `mod(a, 1)` (the same bits, a tighter interval).
+    Fract,
+    /// `min(max(a, lo), hi)`.
+    Clamp,
+    /// `a + (b - a)·t`.
+    Mix,
+    /// The cubic Hermite step between two edges.
+    Smoothstep,
+    /// A smooth maximum of a and b (of a and -b when the flag is set).
+    BlendMax(bool),
+    /// `|s| - t`.
+    Shell,
+    /// The shape evaluated with this coordinate replaced by its magnitude.
+    Mirror(usize),
+    /// The shape evaluated in the cell of a periodic lattice.
+    Repeat,
+    /// The shape evaluated at the point rotated back about an axis.
+    RotateAxis,
+    /// `min(k)·s(x/kx, y/ky, z/kz)`.
+    ScaleXyz,
 }
 
 impl Form {
     fn arity(self) -> Arity {
         match self {
-            Form::Unary(_) => Arity::Exactly(1),
-            Form::Binary(_) | Form::Pow | Form::Difference | Form::Scale | Form::Rotate(..) => {
-                Arity::Exactly(2)
-            }
+            Form::Unary(_) | Form::Fract | Form::Mirror(_) => Arity::Exactly(1),
+            Form::Binary(_)
+            | Form::Pow
+            | Form::Difference
+            | Form::Scale
+            | Form::Rotate(..)
+            | Form::Shell => Arity::Exactly(2),
             Form::Fold(_) => Arity::AtLeastTwo,
-            Form::Blend => Arity::Exactly(3),
-            Form::Translate => Arity::Exactly(4),
+            Form::Blend | Form::BlendMax(_) | Form::Clamp | Form::Mix | Form::Smoothstep => {
+                Arity::Exactly(3)
+            }
+            Form::Translate | Form::Repeat | Form::ScaleXyz => Arity::Exactly(4),
+            Form::RotateAxis => Arity::Exactly(5),
         }
     }
 }
 
 impl Builtin {
     /// Every builtin.
-    pub const ALL: [Builtin; 21] = [
+    pub const ALL: [Builtin; 47] = [
         Builtin::Sqrt,
         Builtin::Abs,
         Builtin::Exp,
@@ -150,6 +228,32 @@ impl Builtin {
         Builtin::RotateX,
         Builtin::RotateY,
         Builtin::RotateZ,
+        Builtin::Tan,
+        Builtin::Asin,
+        Builtin::Acos,
+        Builtin::Atan,
+        Builtin::Sinh,
+        Builtin::Cosh,
+        Builtin::Tanh,
+        Builtin::Floor,
+        Builtin::Ceil,
+        Builtin::Round,
+        Builtin::Fract,
+        Builtin::Sign,
+        Builtin::Mod,
+        Builtin::Clamp,
+        Builtin::Mix,
+        Builtin::Smoothstep,
+        Builtin::BlendIntersect,
+        Builtin::BlendDifference,
+        Builtin::Shell,
+        Builtin::Offset,
+        Builtin::MirrorX,
+        Builtin::MirrorY,
+        Builtin::MirrorZ,
+        Builtin::Repeat,
+        Builtin::Rotate,
+        Builtin::ScaleXyz,
     ];
 
     /// The builtin's name in the language and the form it lowers to.
@@ -178,6 +282,32 @@ impl Builtin {
             B::RotateX => ("rotate_x", Form::Rotate(1, 2)),
             B::RotateY => ("rotate_y", Form::Rotate(2, 0)),
             B::RotateZ => ("rotate_z", Form::Rotate(0, 1)),
+            B::Tan => ("tan", Form::Unary(UnaryOp::Tan)),
+            B::Asin => ("asin", Form::Unary(UnaryOp::Asin)),
+            B::Acos => ("acos", Form::Unary(UnaryOp::Acos)),
+            B::Atan => ("atan", Form::Unary(UnaryOp::Atan)),
+            B::Sinh => ("sinh", Form::Unary(UnaryOp::Sinh)),
+            B::Cosh => ("cosh", Form::Unary(UnaryOp::Cosh)),
+            B::Tanh => ("tanh", Form::Unary(UnaryOp::Tanh)),
+            B::Floor => ("floor", Form::Unary(UnaryOp::Floor)),
+            B::Ceil => ("ceil", Form::Unary(UnaryOp::Ceil)),
+            B::Round => ("round", Form::Unary(UnaryOp::Round)),
+            B::Fract => ("fract", Form::Fract),
+            B::Sign => ("sign", Form::Unary(UnaryOp::Sign)),
+            B::Mod => ("mod", Form::Binary(BinaryOp::Mod)),
+            B::Clamp => ("clamp", Form::Clamp),
+            B::Mix => ("mix", Form::Mix),
+            B::Smoothstep => ("smoothstep", Form::Smoothstep),
+            B::BlendIntersect => ("blend_intersect", Form::BlendMax(false)),
+            B::BlendDifference => ("blend_difference", Form::BlendMax(true)),
+            B::Shell => ("shell", Form::Shell),
+            B::Offset => ("offset", Form::Binary(BinaryOp::Sub)),
+            B::MirrorX => ("mirror_x", Form::Mirror(0)),
+            B::MirrorY => ("mirror_y", Form::Mirror(1)),
+            B::MirrorZ => ("mirror_z", Form::Mirror(2)),
+            B::Repeat => ("repeat", Form::Repeat),
+            B::Rotate => ("rotate", Form::RotateAxis),
+            B::ScaleXyz => ("scale_xyz", Form::ScaleXyz),
         }
     }
 
@@ -240,154 +370,25 @@ impl Builtin {
             Form::Translate => l.translate(args, ctx, env),
             Form::Scale => l.scale(args, span, ctx, env),
             Form::Rotate(iu, iv) => l.rotate(iu, iv, args, ctx, env),
-        }
-    }
-}
-
-impl<'a> Lowerer<'_, 'a> {
-    /// A constant argument that must be positive and finite (`what` names
-    /// it in the error, `help` says what to do instead).
-    fn positive_arg(
-        &mut self,
-        arg: &'a Expr,
-        (ctx, env): (&Ctx<'a>, Env),
-        what: &str,
-        help: &str,
-    ) -> Result<f64, Diag> {
-        let k = self.constant_arg(arg, ctx, env, what)?;
-        if !(k > 0.0 && k.is_finite()) {
-            return Err(ctx
-                .diag(arg.span, format!("{what} must be positive, but it is {k}"))
-                .with_help(help));
-        }
-        Ok(k)
-    }
-
-    /// `blend(a, b, k)`.
-    fn blend(
-        &mut self,
-        args: &'a [Expr],
-        span: (usize, usize),
-        ctx: &Ctx<'a>,
-        env: Env,
-    ) -> Result<Val, Diag> {
-        let k = self.positive_arg(
-            &args[2],
-            (ctx, env),
-            "the blend radius",
-            "use `union(a, b)` for a sharp join",
-        )?;
-        let a = self.lower(&args[0], ctx, env)?;
-        let b = self.lower(&args[1], ctx, env)?;
-        // h = max(k - |a - b|, 0) / k;  min(a, b) - h² k/4
-        let d = self.binary(BinaryOp::Sub, a, b, ctx, span)?;
-        let ad = self.unary(UnaryOp::Abs, d, ctx, span)?;
-        let t = self.binary(BinaryOp::Sub, Val::Const(k), ad, ctx, span)?;
-        let m = self.binary(BinaryOp::Max, t, Val::Const(0.0), ctx, span)?;
-        let h = self.binary(BinaryOp::Div, m, Val::Const(k), ctx, span)?;
-        let h2 = self.unary(UnaryOp::Square, h, ctx, span)?;
-        let c = self.binary(BinaryOp::Mul, h2, Val::Const(k / 4.0), ctx, span)?;
-        let mn = self.binary(BinaryOp::Min, a, b, ctx, span)?;
-        self.binary(BinaryOp::Sub, mn, c, ctx, span)
-    }
-
-    /// `translate(s, dx, dy, dz)`.
-    fn translate(&mut self, args: &'a [Expr], ctx: &Ctx<'a>, env: Env) -> Result<Val, Diag> {
-        let mut new_env = env;
-        for (i, slot) in new_env.iter_mut().enumerate() {
-            let d = self.lower(&args[i + 1], ctx, env)?;
-            let c = self.coord(env[i]);
-            let d = self.node(d);
-            *slot = Coord::Node(self.b.binary(BinaryOp::Sub, c, d));
-        }
-        self.lower(&args[0], ctx, new_env)
-    }
-
-    /// `scale(s, k)`.
-    fn scale(
-        &mut self,
-        args: &'a [Expr],
-        span: (usize, usize),
-        ctx: &Ctx<'a>,
-        env: Env,
-    ) -> Result<Val, Diag> {
-        let k = self.positive_arg(
-            &args[1],
-            (ctx, env),
-            "the scale factor",
-            "mirroring is not supported; scale by a positive number",
-        )?;
-        let mut new_env = env;
-        for slot in new_env.iter_mut() {
-            let c = self.coord(*slot);
-            let kk = self.b.constant(k);
-            *slot = Coord::Node(self.b.binary(BinaryOp::Div, c, kk));
-        }
-        let s = self.lower(&args[0], ctx, new_env)?;
-        self.binary(BinaryOp::Mul, Val::Const(k), s, ctx, span)
-    }
-
-    /// `rotate_*(s, degrees)`, in the plane of coordinates `iu` and `iv`.
-    fn rotate(
-        &mut self,
-        iu: usize,
-        iv: usize,
-        args: &'a [Expr],
-        ctx: &Ctx<'a>,
-        env: Env,
-    ) -> Result<Val, Diag> {
-        let deg = self.constant_arg(&args[1], ctx, env, "the rotation angle")?;
-        if !deg.is_finite() {
-            return Err(ctx.diag(args[1].span, "the rotation angle must be finite".into()));
-        }
-        let (c, s) = cos_sin_deg(deg);
-        // Evaluate at the point rotated by -deg: for a rotation in the
-        // (u, v) plane, u' = c u + s v and v' = -s u + c v.
-        let u = self.coord(env[iu]);
-        let v = self.coord(env[iv]);
-        let nu = self.lin(c, u, s, v);
-        let nv = self.lin(-s, u, c, v);
-        let mut new_env = env;
-        new_env[iu] = Coord::Node(nu);
-        new_env[iv] = Coord::Node(nv);
-        self.lower(&args[0], ctx, new_env)
-    }
-
-    /// `c1*a + c2*b` for constant coefficients, skipping zero terms and
-    /// unit factors (rotations by multiples of 90° stay exact).
-    fn lin(&mut self, c1: f64, a: ValueId, c2: f64, b: ValueId) -> ValueId {
-        let term = |l: &mut Self, c: f64, v: ValueId| -> Option<ValueId> {
-            if c == 0.0 {
-                None
-            } else if c == 1.0 {
-                Some(v)
-            } else {
-                let k = l.b.constant(c);
-                Some(l.b.binary(BinaryOp::Mul, k, v))
+            Form::Fract => {
+                let a = l.lower(&args[0], ctx, env)?;
+                l.binary(BinaryOp::Mod, a, Val::Const(1.0), ctx, span)
             }
-        };
-        match (term(self, c1, a), term(self, c2, b)) {
-            (Some(p), Some(q)) => self.b.binary(BinaryOp::Add, p, q),
-            (Some(p), None) | (None, Some(p)) => p,
-            (None, None) => self.b.constant(0.0),
+            Form::Clamp => l.clamp(args, span, ctx, env),
+            Form::Mix => l.mix(args, span, ctx, env),
+            Form::Smoothstep => l.smoothstep(args, span, ctx, env),
+            Form::BlendMax(negate_b) => l.blend_max(negate_b, args, span, ctx, env),
+            Form::Shell => {
+                let s = l.lower(&args[0], ctx, env)?;
+                let t = l.lower(&args[1], ctx, env)?;
+                let a = l.unary(UnaryOp::Abs, s, ctx, span)?;
+                l.binary(BinaryOp::Sub, a, t, ctx, span)
+            }
+            Form::Mirror(axis) => l.mirror(axis, args, ctx, env),
+            Form::Repeat => l.repeat(args, ctx, env),
+            Form::RotateAxis => l.rotate_axis(args, ctx, env),
+            Form::ScaleXyz => l.scale_xyz(args, span, ctx, env),
         }
-    }
-}
-
-/// cos and sin of an angle in degrees, exact at multiples of 90°.
-fn cos_sin_deg(deg: f64) -> (f64, f64) {
-    let r = deg.rem_euclid(360.0);
-    if r == 0.0 {
-        (1.0, 0.0)
-    } else if r == 90.0 {
-        (0.0, 1.0)
-    } else if r == 180.0 {
-        (-1.0, 0.0)
-    } else if r == 270.0 {
-        (0.0, -1.0)
-    } else {
-        let t = deg.to_radians();
-        (t.cos(), t.sin())
     }
 }
 
@@ -411,14 +412,5 @@ mod tests {
         assert_eq!(Builtin::Union.arity().to_string(), "at least 2 arguments");
         assert!(Builtin::Min.arity().accepts(5) && !Builtin::Min.arity().accepts(1));
         assert_eq!(Arity::Exactly(0).to_string(), "0 arguments");
-    }
-
-    #[test]
-    fn right_angles_are_exact() {
-        assert_eq!(cos_sin_deg(90.0), (0.0, 1.0));
-        assert_eq!(cos_sin_deg(-90.0), (0.0, -1.0));
-        assert_eq!(cos_sin_deg(540.0), (-1.0, 0.0));
-        let (c, s) = cos_sin_deg(30.0);
-        assert!((c - 0.75f64.sqrt()).abs() < 1e-15 && (s - 0.5).abs() < 1e-15);
     }
 }

@@ -13,6 +13,7 @@ pub mod lower;
 pub mod parser;
 pub mod scene;
 pub mod vm;
+pub mod vm_export;
 
 use crate::ir::Function;
 use crate::lang::lower::Program;

@@ -14,6 +14,16 @@ enum VmOp {
     Unary(UnaryOp),
     Recip,
     Binary(BinaryOp),
+    /// -1, 0 or 1 as a < b, a = b, a > b: `sign(a - b)`.
+    Compare,
+    /// 1 where a = 0, else 0: `1 - |sign(a)|`.
+    Not,
+    /// a where a = 0, else b: `b·|sign(a)|`.
+    And,
+    /// a where a ≠ 0, else b: `a + b·(1 - |sign(a)|)`.
+    Or,
+    /// An op whose meaning depends on state ibeam does not model.
+    Unsupported(&'static str),
 }
 
 impl VmOp {
@@ -21,8 +31,9 @@ impl VmOp {
     fn arity(self) -> usize {
         match self {
             VmOp::Var(_) => 0,
-            VmOp::Const | VmOp::Unary(_) | VmOp::Recip => 1,
-            VmOp::Binary(_) => 2,
+            VmOp::Const | VmOp::Unary(_) | VmOp::Recip | VmOp::Not => 1,
+            VmOp::Binary(_) | VmOp::Compare | VmOp::And | VmOp::Or => 2,
+            VmOp::Unsupported(_) => 0,
         }
     }
 }
@@ -50,6 +61,28 @@ const OPS: &[(&str, VmOp)] = &[
     ("min", VmOp::Binary(BinaryOp::Min)),
     ("max", VmOp::Binary(BinaryOp::Max)),
     ("atan2", VmOp::Binary(BinaryOp::Atan2)),
+    ("floor", VmOp::Unary(UnaryOp::Floor)),
+    ("ceil", VmOp::Unary(UnaryOp::Ceil)),
+    ("round", VmOp::Unary(UnaryOp::Round)),
+    ("tan", VmOp::Unary(UnaryOp::Tan)),
+    ("asin", VmOp::Unary(UnaryOp::Asin)),
+    ("acos", VmOp::Unary(UnaryOp::Acos)),
+    ("atan", VmOp::Unary(UnaryOp::Atan)),
+    ("mod", VmOp::Binary(BinaryOp::Mod)),
+    ("compare", VmOp::Compare),
+    ("not", VmOp::Not),
+    ("and", VmOp::And),
+    ("or", VmOp::Or),
+    (
+        "rand",
+        VmOp::Unsupported("a pseudo-random number has no interval enclosure ibeam could guarantee"),
+    ),
+    (
+        "mix",
+        VmOp::Unsupported(
+            "Fidget's `mix` draws from a pseudo-random source; use min/max/mul instead",
+        ),
+    ),
 ];
 
 fn vm_op(name: &str) -> Option<VmOp> {
@@ -132,6 +165,13 @@ fn parse_line(
         );
     };
     let op = vm_op(op_word.1).ok_or_else(|| unknown_op(op_word, src))?;
+    if let VmOp::Unsupported(why) = op {
+        return Err(Diag::new(
+            src,
+            word_span(op_word),
+            format!("op `{}` is not supported: {why}", op_word.1),
+        ));
+    }
     let arity = op.arity();
     let args = &w[2..];
     if args.len() != arity {
@@ -186,7 +226,37 @@ fn parse_line(
             let (x, y) = (operand(0)?, operand(1)?);
             b.binary(o, x, y)
         }
+        VmOp::Compare => {
+            let (x, y) = (operand(0)?, operand(1)?);
+            let d = b.binary(BinaryOp::Sub, x, y);
+            b.unary(UnaryOp::Sign, d)
+        }
+        VmOp::Not => {
+            let nz = nonzero(b, operand(0)?);
+            let one = b.constant(1.0);
+            b.binary(BinaryOp::Sub, one, nz)
+        }
+        VmOp::And => {
+            let (x, y) = (operand(0)?, operand(1)?);
+            let nz = nonzero(b, x);
+            b.binary(BinaryOp::Mul, y, nz)
+        }
+        VmOp::Or => {
+            let (x, y) = (operand(0)?, operand(1)?);
+            let nz = nonzero(b, x);
+            let one = b.constant(1.0);
+            let z = b.binary(BinaryOp::Sub, one, nz);
+            let t = b.binary(BinaryOp::Mul, y, z);
+            b.binary(BinaryOp::Add, x, t)
+        }
+        VmOp::Unsupported(_) => unreachable!("rejected above"),
     })
+}
+
+/// `|sign(a)|`: 1 where a ≠ 0, 0 where a = 0 (NaN for NaN).
+fn nonzero(b: &mut Builder, a: ValueId) -> ValueId {
+    let s = b.unary(UnaryOp::Sign, a);
+    b.unary(UnaryOp::Abs, s)
 }
 
 /// "unknown op", with the closest opcode or the list of them as a hint.

@@ -7,6 +7,7 @@
 mod errors;
 mod expressions;
 mod files;
+mod functions;
 mod input;
 mod limits;
 

@@ -23,6 +23,7 @@
 
 mod calls;
 mod expr;
+mod shapes;
 
 pub(in crate::lang) use expr::{Coord, Ctx, Env, Lowerer, Val, int_exponent};
 
