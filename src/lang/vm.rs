@@ -266,10 +266,15 @@ fn unknown_op(op_word: Word<'_>, src: usize) -> Diag {
         word_span(op_word),
         format!("unknown op `{}`", op_word.1),
     );
-    match suggest(op_word.1, OPS.iter().map(|(n, _)| *n)) {
+    let supported = || {
+        OPS.iter()
+            .filter(|(_, op)| !matches!(op, VmOp::Unsupported(_)))
+            .map(|(n, _)| *n)
+    };
+    match suggest(op_word.1, supported()) {
         Some(s) => d.with_help(format!("did you mean `{s}`?")),
         None => {
-            let names: Vec<&str> = OPS.iter().map(|(n, _)| *n).collect();
+            let names: Vec<&str> = supported().collect();
             d.with_help(format!("supported ops: {}", names.join(" ")))
         }
     }
