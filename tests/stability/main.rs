@@ -17,6 +17,7 @@
 
 mod adversarial;
 mod extremes;
+mod jumps;
 mod singular;
 
 use std::sync::Arc;
