@@ -26,6 +26,7 @@
 use glam::DVec3;
 
 use super::camera::{bounds_box, normalize};
+use super::refine::illinois;
 use super::tracer::Tracer;
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_hull, box_meet, dot as dot_box, normalize_box, point_box};
@@ -209,6 +210,8 @@ pub(crate) struct Surf {
     pub min_w: f64,
     /// Object colour (linear RGB).
     pub color: DVec3,
+    /// Length of f's gradient at `p` (NaN for a cut face at the bounds).
+    pub grad_len: f64,
 }
 
 /// Surface geometry at a hit (normal from the point gradient).
@@ -232,6 +235,7 @@ pub(crate) fn surface(
             v,
             min_w: 0.5 * eps,
             color,
+            grad_len: f64::NAN,
         };
     }
     let g = tr.point_grad(hit.obj, p.to_array(), st);
@@ -244,6 +248,71 @@ pub(crate) fn surface(
         v,
         min_w: 0.5 * eps,
         color,
+        grad_len: DVec3::from_array(g.d).length(),
+    }
+}
+
+/// Below this fraction of the largest gradient of the same object among a
+/// tile's hits, a hit's normal is recomputed at a polished root.
+pub(crate) const SINGULAR_GRADIENT: f64 = 0.05;
+
+/// How much tighter than the visibility tolerance a near-singular hit is
+/// polished before its normal is taken.
+const POLISH: f64 = 1e-6;
+
+/// Sound normals where ∇f nearly vanishes on the surface.
+///
+/// A hit is accurate to a quarter pixel along its ray. Where ∇f is
+/// regular that offset barely turns the gradient, but near a curve where
+/// ∇f vanishes on the surface (the equator of `heart.ib`, where f behaves
+/// like the cube of a regular function) the part of ∇f that the offset
+/// adds outgrows the part that the surface's own shape gives, and the
+/// normal swings to a wrong direction: a dotted dark line. Such hits are
+/// recognised by a gradient far below the largest one of the same object
+/// in the tile; their root is re-bracketed around the hit and refined a
+/// million times tighter, and the normal is the gradient there. Where no
+/// sign change brackets the hit (a tangency), the normal is kept.
+pub(crate) fn mend_singular_normals(
+    tr: &Tracer<'_>,
+    rays: &[super::camera::PixelRay],
+    hits: &[Option<super::Hit>],
+    surfs: &mut [Option<Surf>],
+    st: &mut RenderStats,
+) {
+    let mut largest = vec![0.0f64; tr.evals.len()];
+    for (h, s) in hits.iter().zip(surfs.iter()) {
+        if let (Some(h), Some(s)) = (h, s)
+            && s.grad_len.is_finite()
+        {
+            largest[h.obj] = largest[h.obj].max(s.grad_len);
+        }
+    }
+    for k in 0..surfs.len() {
+        let (Some(hit), Some(surf)) = (&hits[k], &mut surfs[k]) else {
+            continue;
+        };
+        if !(surf.grad_len < SINGULAR_GRADIENT * largest[hit.obj]) {
+            continue;
+        }
+        let ray = &rays[k];
+        let tol = tr.cam.tolerance(hit.t);
+        let (a, b) = (hit.t - 2.0 * tol, hit.t + 2.0 * tol);
+        let f = |t: f64, st: &mut RenderStats| tr.point(hit.obj, ray.at(t), st);
+        let (fa, fb) = (f(a, st), f(b, st));
+        if !(fa.is_finite() && fb.is_finite() && (fa <= 0.0) != (fb <= 0.0)) {
+            continue;
+        }
+        let t = illinois(|t| f(t, st), a, b, fa, fb, POLISH * tol);
+        let p = DVec3::from_array(ray.at(t));
+        let g = tr.point_grad(hit.obj, p.to_array(), st);
+        let Some(nout) = normalize(DVec3::from_array(g.d)) else {
+            continue;
+        };
+        let eps = (surf.q - surf.p).length();
+        surf.n = if nout.dot(surf.v) < 0.0 { -nout } else { nout };
+        surf.q = p + nout * eps;
+        surf.p = p;
+        surf.grad_len = DVec3::from_array(g.d).length();
     }
 }
 
@@ -430,6 +499,7 @@ mod tests {
                     v,
                     min_w: 1e-3,
                     color: DVec3::from_array(color),
+                    grad_len: 1.0,
                 };
                 let mut st = RenderStats::default();
                 let (c, _) = shade(&tr, &surf, &[true, true], &mut st);

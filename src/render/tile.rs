@@ -90,13 +90,14 @@ pub(crate) fn render_tile(
     // Hit points lie in the tile's beam: their normals may come from the
     // pruned functions too (the same bits).
     let t_shade = Instant::now();
-    let surfs: Vec<Option<Surf>> = (0..n)
+    let mut surfs: Vec<Option<Surf>> = (0..n)
         .map(|k| {
             tile.hits[k]
                 .as_ref()
                 .map(|h| shade::surface(tr_vis, &tile.rays[k], h, &mut st.stats))
         })
         .collect();
+    shade::mend_singular_normals(tr_vis, &tile.rays, &tile.hits, &mut surfs, &mut st.stats);
     st.stats.shade_cpu_ms += ms_since(t_shade);
 
     let lit_by_beam = shadow_beams(tr, &tile, &surfs, &mut st);
