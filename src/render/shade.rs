@@ -291,7 +291,9 @@ pub(crate) fn mend_singular_normals(
         let (Some(hit), Some(surf)) = (&hits[k], &mut surfs[k]) else {
             continue;
         };
-        if !(surf.grad_len < SINGULAR_GRADIENT * largest[hit.obj]) {
+        // A NaN length (a cut face) is never near-singular.
+        let singular = surf.grad_len < SINGULAR_GRADIENT * largest[hit.obj];
+        if !singular {
             continue;
         }
         let ray = &rays[k];
