@@ -6,6 +6,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 mod ir;
+mod watch;
 
 use common::{ibeam, stderr};
 use std::path::{Path, PathBuf};
