@@ -129,6 +129,13 @@ impl Walk<'_> {
                 continue;
             }
             self.files.push(id.clone());
+            // Opening a FIFO blocks until a writer comes, and a device may
+            // never end: only plain files are read.
+            if !std::fs::metadata(&id).is_ok_and(|m| m.is_file()) {
+                return Err(
+                    self.render(at_path(format!("cannot import `{name}`: it is not a file")))
+                );
+            }
             if self.stack.len() >= MAX_IMPORT_DEPTH {
                 return Err(self.render(Diag::new(
                     src,

@@ -185,6 +185,28 @@ fn a_missing_import_is_an_error_at_the_import() {
 }
 
 #[test]
+fn only_plain_files_are_imported() {
+    let dir = tree(
+        "folder",
+        &[
+            ("main.ib", "import \"lib\";\nobject o = sphere(1);\n"),
+            ("lib/a.ib", "let a = 1;\n"),
+        ],
+    );
+    let e = load_err(&dir);
+    assert_eq!((e.line, e.col), (1, 8));
+    assert!(e.message.ends_with("it is not a file"), "{e}");
+    #[cfg(unix)]
+    {
+        // A device would be read forever (or block, like a FIFO).
+        std::fs::write(dir.join("main.ib"), "import \"/dev/zero\";\n").unwrap();
+        let e = load_err(&dir);
+        assert!(e.message.ends_with("it is not a file"), "{e}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn importing_a_vm_model_is_an_error() {
     let dir = tree(
         "vm",
@@ -260,4 +282,27 @@ fn import_syntax_errors() {
         8,
     );
     assert_err("let a = \"x\";", "unexpected string", 1, 9);
+}
+
+#[test]
+fn imports_nest_a_bounded_number_of_files_deep() {
+    use ibeam::lang::imports::MAX_IMPORT_DEPTH;
+    let n = MAX_IMPORT_DEPTH + 10;
+    let texts: Vec<(String, String)> = (0..n)
+        .map(|i| (format!("f{i}.ib"), format!("import \"f{}.ib\";\n", i + 1)))
+        .chain([(format!("f{n}.ib"), "let k = 1;\n".to_string())])
+        .chain([(
+            "main.ib".to_string(),
+            "import \"f0.ib\";\nobject o = sphere(k);\n".to_string(),
+        )])
+        .collect();
+    let files: Vec<(&str, &str)> = texts
+        .iter()
+        .map(|(p, t)| (p.as_str(), t.as_str()))
+        .collect();
+    let dir = tree("deep", &files);
+    let e = load_err(&dir);
+    assert!(e.message.starts_with("imports nest too deeply"), "{e}");
+    assert_eq!(e.line, 1);
+    let _ = std::fs::remove_dir_all(&dir);
 }
