@@ -75,8 +75,11 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         let _ = tx.send(event);
     })
     .map_err(|e| format!("cannot watch files: {e}"))?;
-    let mut files: Vec<PathBuf> = Vec::new();
+    // The main file's folder is watched before the first load, so a save
+    // while it loads is not missed.
+    let mut files = vec![ibeam::lang::imports::file_identity(&args.render.file)];
     let mut dirs: BTreeSet<PathBuf> = BTreeSet::new();
+    watch_folders(&mut watcher, &mut dirs, &files);
     let quiet = args.render.quiet;
     loop {
         let loaded = ibeam::lang::load_scene_with_files(&args.render.file);
