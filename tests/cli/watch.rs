@@ -1,7 +1,9 @@
 //! `ibeam watch` end to end: the real binary on a scene in a scratch
 //! folder, edited the ways people edit (in place, and by an editor's
 //! write-and-rename), broken and fixed, then stopped with SIGINT. Waits
-//! poll with a generous timeout; nothing is timed.
+//! poll with a generous timeout; nothing is timed. Unix only: the test
+//! stops the watcher with `kill -INT`.
+#![cfg(unix)]
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -102,7 +104,6 @@ fn save_by_rename(path: &Path, text: &str) {
     std::fs::rename(&tmp, path).unwrap();
 }
 
-#[cfg(unix)]
 #[test]
 fn watch_rerenders_on_save_keeps_going_after_errors_and_stops_on_sigint() {
     let dir: PathBuf = super::scratch("watch");
