@@ -22,6 +22,8 @@ enum Command {
     Eval(cli::eval::Args),
     /// Render a scene to PNG with the guaranteed beam tracer.
     Render(cli::render::Args),
+    /// Render a scene, then again (preview first) each time it or an import is saved.
+    Watch(cli::watch::Args),
     /// Run a benchmark and print its table (baseline in the same run).
     Bench(cli::bench::Args),
     /// Write a scene's objects in another format (`--vm`: Fidget's text).
@@ -41,6 +43,7 @@ fn main() -> ExitCode {
             Command::Ir(a) => cli::ir::run(a),
             Command::Eval(a) => cli::eval::run(a),
             Command::Render(a) => cli::render::run(a),
+            Command::Watch(a) => cli::watch::run(a),
             Command::Bench(a) => cli::bench::run(a),
             Command::Export(a) => cli::export::run(a),
         });

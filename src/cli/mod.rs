@@ -9,6 +9,7 @@ pub mod export;
 pub mod ir;
 pub mod png_stream;
 pub mod render;
+pub mod watch;
 
 pub use ibeam::eval::{EvalKind, build_evaluator, build_evaluators};
 

@@ -47,7 +47,7 @@ impl fmt::Display for MethodArg {
 }
 
 /// Arguments of `ibeam render`.
-#[derive(clap::Args, Debug)]
+#[derive(clap::Args, Debug, Clone)]
 pub struct Args {
     /// Scene file (`.ib`) or Fidget model (`.vm`).
     pub file: PathBuf,
@@ -199,6 +199,16 @@ impl Drop for Outputs {
 
 /// Runs `ibeam render`.
 pub fn run(args: &Args) -> Result<(), CliError> {
+    run_with(args, |file| Ok(ibeam::lang::load_scene(file)?))
+}
+
+/// Runs `ibeam render` on the scene `load` gives for `args.file` (called
+/// once the outputs are known to be writable); `ibeam watch` loads the
+/// scene itself, to learn the files it imports.
+pub fn run_with(
+    args: &Args,
+    load: impl FnOnce(&Path) -> Result<ibeam::scene::Scene, CliError>,
+) -> Result<(), CliError> {
     let mut outputs = Outputs {
         created: Vec::new(),
         done: false,
@@ -207,7 +217,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     for p in std::iter::once(&args.output).chain(extra.into_iter().flatten()) {
         outputs.claim(p)?;
     }
-    let scene = ibeam::lang::load_scene(&args.file)?;
+    let scene = load(&args.file)?;
     if scene.objects.is_empty() {
         return Err(format!("{}: the scene has no objects", args.file.display()).into());
     }

@@ -140,6 +140,16 @@ pub enum Item {
         /// The properties.
         props: Vec<Prop>,
     },
+    /// `import "path";`: the definitions of another file.
+    Import {
+        /// The path as written, without quotes (relative paths are taken
+        /// from the importing file's folder).
+        path: String,
+        /// Where the statement is, `import` to the closing quote.
+        span: Span,
+        /// Where the quoted path is.
+        path_span: Span,
+    },
     /// `bounds = (…) .. (…);`
     Bounds {
         /// The keyword's span.

@@ -1,4 +1,5 @@
-//! Diagnostics: an error with a span in one source, and its rendering as
+//! Diagnostics: an error with a span in one source (of the several a scene
+//! and its imports are read from), and its rendering as
 //! `file:line:col: error: message` followed by a codespan snippet.
 
 use super::LoadError;
@@ -53,7 +54,9 @@ impl Diag {
 }
 
 /// The texts a scene is read from: index 0 is the prelude, 1 the user's
-/// file (for a single-source load, whatever was registered).
+/// file, then each file it imports, in the order read (for a
+/// single-source load, whatever was registered). A diagnostic names the
+/// file of its own source, so an error inside an import names the import.
 #[derive(Default)]
 pub struct Sources {
     files: SimpleFiles<String, String>,

@@ -1,6 +1,6 @@
 //! Reading a scene file's bytes: the size limit and the UTF-8 check, in
-//! one place so that every way of loading a file (and any later import
-//! between files) is bounded the same way.
+//! one place so that every way of loading a file (the main file, and each
+//! file it imports) is bounded the same way.
 
 use super::LoadError;
 use super::diag::{self, Diag, Sources};
@@ -26,28 +26,52 @@ pub fn read_source(path: &Path) -> Result<String, LoadError> {
 /// exercise the limit with a tiny one instead of a 256 MiB file.
 pub fn read_source_limited(path: &Path, limit: u64) -> Result<String, LoadError> {
     let name = path.display().to_string();
-    let cannot_read = |e: std::io::Error| {
-        diag::error_without_position(&name, format!("cannot read `{name}`: {e}"))
-    };
-    let file = File::open(path).map_err(cannot_read)?;
+    let bytes = read_bytes(path, limit)
+        .map_err(|f| diag::error_without_position(&name, f.message(&name)))?;
+    decode_source(&name, bytes)
+}
+
+/// Why a file's bytes could not be had; an import reports it at the
+/// `import` statement, a main file without a position.
+#[derive(Debug)]
+pub(crate) enum ReadFailure {
+    /// Opening or reading failed (missing file, a folder, permissions).
+    Io(std::io::Error),
+    /// Over the limit: (size when known, the limit).
+    TooLarge(Option<u64>, u64),
+}
+
+impl ReadFailure {
+    /// The one-line message, naming the file `name`.
+    pub(crate) fn message(&self, name: &str) -> String {
+        match self {
+            ReadFailure::Io(e) => format!("cannot read `{name}`: {e}"),
+            ReadFailure::TooLarge(size, limit) => too_large(name, *size, *limit),
+        }
+    }
+}
+
+/// The bytes of `path`, at most `limit` of them.
+pub(crate) fn read_bytes(path: &Path, limit: u64) -> Result<Vec<u8>, ReadFailure> {
+    let file = File::open(path).map_err(ReadFailure::Io)?;
     // The length up front refuses a big regular file without reading it;
     // devices and pipes report 0 here and are caught by `take` below.
     if let Ok(meta) = file.metadata()
         && meta.is_file()
         && meta.len() > limit
     {
-        return Err(too_large(&name, Some(meta.len()), limit));
+        return Err(ReadFailure::TooLarge(Some(meta.len()), limit));
     }
     let mut bytes = Vec::new();
     // One byte past the limit tells "exactly at the limit" from "over
     // it" without ever reading further.
     file.take(limit.saturating_add(1))
         .read_to_end(&mut bytes)
-        .map_err(cannot_read)?;
+        .map_err(ReadFailure::Io)?;
     if bytes.len() as u64 > limit {
-        return Err(too_large(&name, None, limit));
+        return Err(ReadFailure::TooLarge(None, limit));
     }
-    decode_source(&name, bytes)
+    Ok(bytes)
 }
 
 /// `bytes` as text, or a diagnostic at the first byte that is not UTF-8.
@@ -58,18 +82,15 @@ pub fn decode_source(name: &str, bytes: Vec<u8>) -> Result<String, LoadError> {
     }
 }
 
-/// The size-limit error; `size` is known for a regular file only.
-fn too_large(name: &str, size: Option<u64>, limit: u64) -> LoadError {
+/// The size-limit message; `size` is known for a regular file only.
+fn too_large(name: &str, size: Option<u64>, limit: u64) -> String {
     let size = match size {
         Some(s) => format!(" ({s} bytes)"),
         None => String::new(),
     };
-    diag::error_without_position(
-        name,
-        format!(
-            "`{name}` is too large{size}: scene files are limited to {limit} bytes ({})",
-            human_bytes(limit)
-        ),
+    format!(
+        "`{name}` is too large{size}: scene files are limited to {limit} bytes ({})",
+        human_bytes(limit)
     )
 }
 

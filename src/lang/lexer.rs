@@ -37,6 +37,17 @@ pub enum Tok<'a> {
     /// `false`
     #[token("false")]
     False,
+    /// `import`
+    #[token("import")]
+    Import,
+    /// A string literal, quotes included: `"lib/shapes.ib"`. There are no
+    /// escapes, and a string ends on its line, so a missing closing quote
+    /// is reported where the string starts instead of swallowing the file.
+    #[regex(r#""[^"\n]*""#)]
+    Str(&'a str),
+    /// A string without its closing quote on the same line.
+    #[regex(r#""[^"\n]*"#)]
+    BadStr(&'a str),
     /// A name: a letter or `_`, then letters, digits and `_`.
     #[regex("[A-Za-z_][A-Za-z0-9_]*")]
     Ident(&'a str),
@@ -117,6 +128,12 @@ impl<'a> Iterator for Lexer<'a> {
                         .with_help(bad_number_help(text)),
                 )
             }
+            Ok(Tok::BadStr(_)) => Err(Diag::new(
+                self.src,
+                span,
+                "unterminated string: no closing `\"` on this line".into(),
+            )
+            .with_help("a path is written on one line, e.g. `import \"lib/shapes.ib\";`")),
             Ok(tok) => Ok((span.start, tok, span.end)),
             Err(()) => {
                 let text = self.inner.slice();
@@ -187,6 +204,24 @@ mod tests {
             ]
         );
         assert_eq!(kinds("lettuce"), vec![Tok::Ident("lettuce")]);
+        assert_eq!(
+            kinds("import \"a b/c.ib\";"),
+            vec![Tok::Import, Tok::Str("\"a b/c.ib\""), Tok::Semi]
+        );
+    }
+
+    #[test]
+    fn unterminated_string_is_an_error_on_its_line() {
+        let e = Lexer::new("import \"lib.ib;\nlet a = 1;", 0)
+            .nth(1)
+            .unwrap()
+            .unwrap_err();
+        assert_eq!(e.span, 7..15);
+        assert!(
+            e.message.starts_with("unterminated string"),
+            "{}",
+            e.message
+        );
     }
 
     #[test]

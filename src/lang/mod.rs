@@ -1,12 +1,16 @@
 //! The scene language: lexer, parser glue, AST, diagnostics, the prelude of
-//! primitives, and the importer for Fidget's `.vm` format.
+//! primitives, `import` between scene files, and the importer for
+//! Fidget's `.vm` format.
 //!
 //! See `docs/language.md` for the language reference. Entry points:
-//! [`load_scene`], [`load_scene_source`] and [`function_from_formula`].
+//! [`load_scene`], [`load_scene_with_files`] (which also tells the files
+//! read, for `ibeam watch`), [`load_scene_source`] and
+//! [`function_from_formula`].
 
 pub mod ast;
 pub mod builtins;
 pub mod diag;
+pub mod imports;
 pub mod input;
 pub mod lexer;
 pub mod lower;
@@ -21,7 +25,7 @@ use crate::scene::Scene;
 use diag::Sources;
 pub use input::{MAX_SOURCE_BYTES, read_source};
 use std::fmt;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The prelude's source text.
 pub const PRELUDE: &str = include_str!("prelude.ib");
@@ -58,16 +62,45 @@ impl fmt::Display for LoadError {
 impl std::error::Error for LoadError {}
 
 /// Reads and lowers a scene file: `*.vm` is read as Fidget's SSA format,
-/// anything else as an ibeam scene. Files over [`MAX_SOURCE_BYTES`] or
-/// not UTF-8 are refused (see [`read_source`]).
+/// anything else as an ibeam scene (with its imports). Files over
+/// [`MAX_SOURCE_BYTES`] or not UTF-8 are refused (see [`read_source`]).
 pub fn load_scene(path: &Path) -> Result<Scene, LoadError> {
-    let text = read_source(path)?;
-    load_scene_source(&path.display().to_string(), &text)
+    load_scene_with_files(path).scene
+}
+
+/// A scene load, with the files it read.
+#[derive(Debug)]
+pub struct Loaded {
+    /// The scene, or the first error.
+    pub scene: Result<Scene, LoadError>,
+    /// Every file read, as canonical paths (absolute where a file is
+    /// missing): the main file first, then each import once, in the order
+    /// found. After a failure, the files read or tried up to the error, so
+    /// that a watcher also watches the one to fix.
+    pub files: Vec<PathBuf>,
+}
+
+/// [`load_scene`], also telling which files the scene was read from.
+pub fn load_scene_with_files(path: &Path) -> Loaded {
+    let mut files = vec![imports::file_identity(path)];
+    let scene = read_source(path)
+        .and_then(|text| load_tracked(&path.display().to_string(), &text, &mut files));
+    Loaded { scene, files }
 }
 
 /// Lowers scene text; `file_name` picks the format by its extension (as
-/// in [`load_scene`]) and names the file in diagnostics.
+/// in [`load_scene`]), names the file in diagnostics, and is the place
+/// its imports are found from.
 pub fn load_scene_source(file_name: &str, source: &str) -> Result<Scene, LoadError> {
+    load_tracked(file_name, source, &mut Vec::new())
+}
+
+/// [`load_scene_source`], adding the files read to `files`.
+fn load_tracked(
+    file_name: &str,
+    source: &str,
+    files: &mut Vec<PathBuf>,
+) -> Result<Scene, LoadError> {
     let is_vm = Path::new(file_name)
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("vm"));
@@ -85,16 +118,29 @@ pub fn load_scene_source(file_name: &str, source: &str) -> Result<Scene, LoadErr
         } else {
             let prelude = sources.add("prelude.ib", PRELUDE);
             let src = sources.add(file_name, source);
-            load_ib(prelude, src, &sources).map_err(|d| sources.render(&d))
+            load_ib(prelude, src, file_name, &mut sources, files)
         }
     })
 }
 
-fn load_ib(prelude: usize, src: usize, sources: &Sources) -> Result<Scene, diag::Diag> {
-    let prelude_items = parser::parse_file(sources.text(prelude), prelude)?;
-    let items = parser::parse_file(sources.text(src), src)?;
-    let prog = Program::new(&[(prelude, &prelude_items), (src, &items)])?;
-    scene::build(&prog, &items, src, sources.text(src).len())
+/// Loads source `src` (named `file_name`) with its imports and the
+/// prelude.
+fn load_ib(
+    prelude: usize,
+    src: usize,
+    file_name: &str,
+    sources: &mut Sources,
+    files: &mut Vec<PathBuf>,
+) -> Result<Scene, LoadError> {
+    let prelude_items = parser::parse_file(PRELUDE, prelude).map_err(|d| sources.render(&d))?;
+    let parsed = imports::read_all(sources, src, file_name, files)?;
+    let sources = &*sources;
+    let mut all = vec![(prelude, prelude_items.as_slice())];
+    all.extend(parsed.iter().map(|(s, items)| (*s, items.as_slice())));
+    let prog = Program::new(&all).map_err(|d| sources.render(&d))?;
+    // The walk records the main file last.
+    let items = parsed.last().map_or(&[][..], |(_, items)| items.as_slice());
+    scene::build(&prog, items, src, sources.text(src).len()).map_err(|d| sources.render(&d))
 }
 
 /// Lowers one expression over x, y, z (the prelude is available) to an

@@ -140,6 +140,7 @@ fn show_expected(t: &str) -> String {
     match t {
         "\"name\"" => "a name".into(),
         "\"number\"" => "a number".into(),
+        "\"string\"" => "a quoted path".into(),
         other => format!("`{}`", other.trim_matches('"')),
     }
 }
@@ -161,6 +162,7 @@ fn describe(tok: &Tok<'_>, text: &str) -> String {
     match tok {
         Tok::Ident(n) => format!("name `{n}`"),
         Tok::Num(n) => format!("number `{n}`"),
+        Tok::Str(s) => format!("string {s}"),
         _ => format!("`{text}`"),
     }
 }

@@ -395,7 +395,7 @@ pub fn build(prog: &Program, items: &[Item], src: usize, text_len: usize) -> Res
     let mut lights = Vec::new();
     for item in items {
         match item {
-            Item::Let { .. } | Item::Fn { .. } => {}
+            Item::Let { .. } | Item::Fn { .. } | Item::Import { .. } => {}
             Item::Object { name, body, props } => {
                 objects.push(object(prog, src, name, body, props, &object_names)?);
                 object_names.push(name);

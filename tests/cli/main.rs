@@ -7,6 +7,7 @@
 mod common;
 mod export;
 mod ir;
+mod watch;
 
 use common::{ibeam, stderr};
 use std::path::{Path, PathBuf};

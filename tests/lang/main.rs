@@ -1,13 +1,14 @@
 //! The scene language end to end: parsing of every construct through
 //! `load_scene_source`, point values of the lowered functions, every example
-//! file, every diagnostic (message and position), `.vm` import, and the
-//! limits on deep and long inputs, reading files (UTF-8, size limit). One
-//! test binary; the topics are its modules.
+//! file, every diagnostic (message and position), `.vm` import, `import`
+//! between scene files, and the limits on deep and long inputs, reading
+//! files (UTF-8, size limit). One test binary; the topics are its modules.
 
 mod errors;
 mod expressions;
 mod files;
 mod functions;
+mod imports;
 mod input;
 mod limits;
 
@@ -144,9 +145,11 @@ fn diagnostic_snapshots() {
             Ok(_) => panic!("{name} loads without error"),
             Err(e) => e,
         };
+        // An error inside an imported file names that file.
+        assert!(e.file.starts_with("tests/diagnostics/"), "{e}");
         assert!(
             e.rendered
-                .starts_with(&format!("{name}:{}:{}: error: ", e.line, e.col))
+                .starts_with(&format!("{}:{}:{}: error: ", e.file, e.line, e.col))
         );
         let stem = f.file_name().unwrap().to_string_lossy().replace('.', "_");
         insta::assert_snapshot!(format!("diag_{stem}"), e.rendered);
