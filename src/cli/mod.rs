@@ -5,9 +5,12 @@
 pub mod accuracy;
 pub mod bench;
 pub mod eval;
+pub mod formats;
 pub mod ir;
 pub mod png_stream;
+pub mod progress;
 pub mod render;
+pub mod view;
 
 pub use ibeam::eval::{EvalKind, build_evaluator, build_evaluators};
 

@@ -32,8 +32,10 @@
 //! CLI encodes into PNGs as they come.
 
 pub mod aa;
+mod band;
 pub mod beam;
 pub mod camera;
+pub mod fit;
 mod frame;
 mod groups;
 pub mod output;
@@ -49,8 +51,9 @@ mod tracer;
 use image::{ImageBuffer, Luma, RgbImage};
 
 pub use aa::{Aa, AaError};
+pub use band::{Band, FloatLayers};
 use camera::CameraError;
-pub use frame::{Band, Frame, render, render_aa};
+pub use frame::{Frame, Progress, render, render_aa};
 pub use stats::RenderStats;
 pub use tracer::is_flat;
 
