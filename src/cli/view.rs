@@ -28,10 +28,10 @@ pub struct ViewArgs {
     pub up: Option<[f64; 3]>,
     /// Perspective view with this vertical field of view, degrees in
     /// (0, 180).
-    #[arg(long, value_name = "DEG", value_parser = parse_fov, conflicts_with = "ortho")]
+    #[arg(long, value_name = "DEG", value_parser = parse_fov, conflicts_with = "ortho", allow_hyphen_values = true)]
     pub fov: Option<f64>,
     /// Orthographic view this wide in world units (> 0).
-    #[arg(long, value_name = "WIDTH", value_parser = parse_positive)]
+    #[arg(long, value_name = "WIDTH", value_parser = parse_positive, allow_hyphen_values = true)]
     pub ortho: Option<f64>,
     /// Turns the eye about the target: YAW degrees about the up axis
     /// (counter-clockwise seen from above), then PITCH degrees towards up.
@@ -39,7 +39,7 @@ pub struct ViewArgs {
     pub orbit: Option<[f64; 2]>,
     /// Brings the eye K times closer to the target (K > 1 zooms in); an
     /// orthographic view gets K times narrower instead.
-    #[arg(long, value_name = "K", value_parser = parse_positive)]
+    #[arg(long, value_name = "K", value_parser = parse_positive, allow_hyphen_values = true)]
     pub zoom: Option<f64>,
     /// Aims the camera at the solid itself and frames it to fill about 80%
     /// of the image, keeping the view direction: a box that contains every

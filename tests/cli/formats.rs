@@ -71,7 +71,7 @@ fn exr_holds_linear_colour_matching_the_png() {
 #[test]
 fn depth_and_normals_exr_read_back() {
     let dir = scratch("exr-aux");
-    let (c, d, n, d16) = ["c.png", "d.exr", "n.exr", "d.png"].map(|f| dir.join(f));
+    let [c, d, n, d16] = ["c.png", "d.exr", "n.exr", "d.png"].map(|f| dir.join(f));
     let s = |p: &Path| p.to_str().unwrap().to_owned();
     let (ds, ns) = (s(&d), s(&n));
     ok(&render(
