@@ -16,6 +16,7 @@ use glam::DVec3;
 
 use super::camera::normalize;
 use crate::eval::Evaluator;
+use crate::eval::interp::Interpreter;
 use crate::interval::Interval;
 use crate::scene::{Bounds, Camera, Projection, Scene};
 
@@ -44,6 +45,18 @@ pub fn solid_box(scene: &Scene, evaluators: &[Arc<dyn Evaluator>], depth: u32) -
             *s |= u;
         }
     }
+    // The interpreter answers without compiling: a large function's
+    // native interval code would cost more to compile than the few
+    // thousand cells cost to interpret (the render itself runs pruned
+    // tapes, not that code).
+    let interpreted: Vec<Arc<dyn Evaluator>> = evaluators
+        .iter()
+        .map(|e| match e.function() {
+            Some(f) => Arc::new(Interpreter::new(f.clone())) as Arc<dyn Evaluator>,
+            None => Arc::clone(e),
+        })
+        .collect();
+    let evaluators = &interpreted[..];
     let mut level: Vec<[Interval; 3]> =
         vec![std::array::from_fn(|i| Interval::new(b.min[i], b.max[i]))];
     // `known` holds points shown to be solid (cell centres where f ≤ 0 and
@@ -66,7 +79,11 @@ pub fn solid_box(scene: &Scene, evaluators: &[Arc<dyn Evaluator>], depth: u32) -
                 continue;
             }
             if centres[k] <= 0.0 {
-                known.add_point(cell.map(Interval::mid));
+                // Along an axis no object uses, f is the same over the
+                // cell's whole extent, so that segment is solid.
+                let lo = std::array::from_fn(|i| if split[i] { cell[i].mid() } else { cell[i].lo });
+                let hi = std::array::from_fn(|i| if split[i] { cell[i].mid() } else { cell[i].hi });
+                known.add(lo, hi);
             }
             undecided.push(*cell);
         }
@@ -167,10 +184,6 @@ struct Hull {
 }
 
 impl Hull {
-    fn add_point(&mut self, p: [f64; 3]) {
-        self.add(p, p);
-    }
-
     fn add_box(&mut self, b: &[Interval; 3]) {
         self.add(b.map(|i| i.lo), b.map(|i| i.hi));
     }
@@ -252,7 +265,6 @@ pub fn frame_box(cam: &Camera, b: &Bounds, width: u32, height: u32) -> Option<Ca
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::eval::interp::Interpreter;
     use crate::ir::{BinaryOp, Builder, Function, Var};
     use crate::scene::{Light, Object, RenderSettings};
 
