@@ -61,9 +61,10 @@ pub struct Args {
     /// Bits per channel of a `.png` colour output: 8 or 16 (sRGB either way).
     #[arg(long, default_value = "8", value_parser = parse_bit_depth)]
     pub bit_depth: u8,
-    /// Camera overrides and framing.
+    /// Camera overrides and framing (boxed: the flags would make every
+    /// subcommand's arguments as big as this one's).
     #[command(flatten)]
-    pub view: ViewArgs,
+    pub view: Box<ViewArgs>,
     /// Every light casts shadows, whatever the scene says.
     #[arg(long, conflicts_with = "no_shadows")]
     pub shadows: bool,

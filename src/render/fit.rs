@@ -70,7 +70,7 @@ pub fn solid_box(scene: &Scene, evaluators: &[Arc<dyn Evaluator>], depth: u32) -
         let centres = centres_over(evaluators, &level, &mut centre_vals);
         let mut undecided = Vec::new();
         for (k, cell) in level.iter().enumerate() {
-            if !(lo[k] <= 0.0) {
+            if lo[k] > 0.0 {
                 // f > 0 (or undefined) over the whole cell: no solid here.
                 continue;
             }
@@ -316,9 +316,9 @@ mod tests {
         let (s, e) = scene(vec![sphere([0.5, -0.25, 0.0], 0.6)]);
         let b = solid_box(&s, &e, FIT_DEPTH).unwrap();
         let c = [0.5, -0.25, 0.0];
-        for i in 0..3 {
+        for (i, ci) in c.into_iter().enumerate() {
             // Sound: the true extent is inside; tight: within 10% of it.
-            assert!(b.min[i] <= c[i] - 0.6 && b.max[i] >= c[i] + 0.6, "{b:?}");
+            assert!(b.min[i] <= ci - 0.6 && b.max[i] >= ci + 0.6, "{b:?}");
             assert!((b.max[i] - b.min[i]) <= 1.2 * 1.1, "{b:?}");
         }
     }
