@@ -55,3 +55,28 @@ impl Bar {
         self.bar.finish_and_clear();
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quiet_renders_get_no_bar() {
+        assert!(Bar::new(true).is_none());
+    }
+
+    // A bar fed before it is due stays hidden; the report never panics on
+    // any count.
+    #[test]
+    fn reports_before_the_delay_draw_nothing() {
+        let bar = Bar {
+            bar: ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden()),
+        };
+        let report = bar.report();
+        report(1, 4);
+        report(4, 4);
+        assert!(bar.bar.is_hidden());
+        assert_eq!(bar.bar.position(), 4);
+        bar.finish();
+    }
+}

@@ -94,7 +94,8 @@ pub struct RenderOptions {
     pub want_normals: bool,
     /// Produce a map of how each pixel was decided.
     pub want_classify: bool,
-    /// Print tile progress on stderr.
+    /// Print a plain tile counter on stderr (unless a caller's report
+    /// replaces it, see [`Frame::with_progress`]).
     pub progress: bool,
     /// Prune large functions to each tile and block (see
     /// [`crate::ir::prune`]); off only to measure what it saves.

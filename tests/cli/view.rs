@@ -252,3 +252,28 @@ fn no_progress_bar_when_stderr_is_not_a_terminal() {
     assert!(!err.is_empty(), "the summary is missing");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn quiet_prints_nothing_and_fit_without_a_solid_warns() {
+    let dir = scratch("view-quiet");
+    let out = dir.join("q.png");
+    let o = render(&example("sphere.ib"), &out, &["--size", "16x16"]);
+    ok(&o);
+    assert_eq!(stderr(&o), "");
+    // Nothing inside the bounds: --fit keeps the camera and says why.
+    let scene = write(&dir, "far.ib", "object s = (x - 9)^2 + y^2 + z^2 - 1;\n");
+    let o = crate::common::ibeam(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--size",
+        "16x16",
+        "--eval",
+        crate::EVAL,
+        "--fit",
+    ]);
+    ok(&o);
+    assert!(stderr(&o).contains("nothing to frame"), "{}", stderr(&o));
+    let _ = std::fs::remove_dir_all(&dir);
+}
