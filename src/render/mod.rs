@@ -21,15 +21,21 @@
 //! for any thread count: every tile is computed independently and the
 //! results and counters are merged in tile order.
 //!
+//! [`fit`] finds a box guaranteed to hold the solid, and a camera that
+//! frames it.
+//!
 //! Private parts: `frame` checks the options and runs and merges the
-//! tiles; `tile` traces one (visibility, shadow beams, shading); `tracer`
-//! holds the state every tile reads and the state each tile carries (its
+//! tiles; `band` turns a row of tiles into a streamed band of images;
+//! `tile` traces one (visibility, shadow beams, shading); `tracer` holds
+//! the state every tile reads and the state each tile carries (its
 //! counters and the mean-value policy's record); `probe` has the beam
 //! tests that [`beam`] and [`aa`] share.
 //!
 //! [`Frame::stream`] is the bounded-memory path: it traces one row of
 //! tiles at a time and hands out finished bands of image rows, which the
-//! CLI encodes into PNGs as they come.
+//! CLI encodes into PNGs as they come (and, with
+//! [`Frame::with_float_layers`], the float values 16-bit PNGs and
+//! OpenEXR files are made from).
 
 pub mod aa;
 mod band;
