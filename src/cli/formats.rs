@@ -1,7 +1,7 @@
 //! Output file formats, chosen by each file's extension: 8-bit PNGs are
 //! streamed band by band (`png_stream`); 16-bit PNGs and OpenEXR files
 //! need float values, which are gathered from the bands and written whole
-//! at the end (12 bytes a pixel per such image, or 6 for a 16-bit PNG).
+//! at the end (12 bytes a pixel per float image, 6 for a 16-bit PNG).
 
 use std::path::{Path, PathBuf};
 
@@ -77,6 +77,7 @@ pub struct Gathered {
     files: Vec<(PathBuf, Layer, Format)>,
     size: (u32, u32),
     color: Vec<f32>,
+    color16: Vec<u16>,
     depth: Vec<f32>,
     normals: Vec<f32>,
 }
@@ -88,6 +89,7 @@ impl Gathered {
             files,
             size,
             color: Vec::new(),
+            color16: Vec::new(),
             depth: Vec::new(),
             normals: Vec::new(),
         }
@@ -106,7 +108,18 @@ impl Gathered {
     /// Appends a band's float values.
     pub fn push(&mut self, band: &Band) {
         if let Some(l) = &band.linear {
-            self.color.extend(l.iter().flatten());
+            // A 16-bit PNG keeps its codes, not the floats: 6 bytes a pixel.
+            if self.files.iter().any(|f| f.2 == Format::Png16) {
+                let codes = l.iter().flatten().map(|&c| srgb_u16(f64::from(c)));
+                self.color16.extend(codes);
+            }
+            if self
+                .files
+                .iter()
+                .any(|f| f.1 == Layer::Color && f.2 == Format::Exr)
+            {
+                self.color.extend(l.iter().flatten());
+            }
         }
         if let Some(d) = &band.depth_t {
             // Three equal channels: the `image` crate writes and reads
@@ -120,27 +133,38 @@ impl Gathered {
 
     /// Writes every gathered file.
     pub fn write(self) -> Result<(), CliError> {
-        let (w, h) = self.size;
-        for (path, layer, format) in &self.files {
-            let values = match layer {
-                Layer::Color => &self.color,
-                Layer::Depth => &self.depth,
-                Layer::Normals => &self.normals,
-                Layer::Classify => continue,
-            };
+        let Gathered {
+            files,
+            size: (w, h),
+            color,
+            color16,
+            depth,
+            normals,
+        } = self;
+        // Each image is moved into its file's buffer, never copied.
+        let (mut color, mut depth, mut normals) = (Some(color), Some(depth), Some(normals));
+        let mut color16 = Some(color16);
+        for (path, layer, format) in &files {
             let err = |e: &dyn std::fmt::Display| format!("cannot write {}: {e}", path.display());
             let result = match format {
                 Format::Png16 => {
-                    let px: Vec<u16> = values.iter().map(|&c| srgb_u16(f64::from(c))).collect();
-                    ImageBuffer::<Rgb<u16>, _>::from_raw(w, h, px)
+                    ImageBuffer::<Rgb<u16>, _>::from_raw(w, h, color16.take().unwrap_or_default())
                         .ok_or("image size mismatch")
                         .map_err(|e| err(&e))?
                         .save_with_format(path, ImageFormat::Png)
                 }
-                Format::Exr => ImageBuffer::<Rgb<f32>, _>::from_raw(w, h, values.clone())
-                    .ok_or("image size mismatch")
-                    .map_err(|e| err(&e))?
-                    .save_with_format(path, ImageFormat::OpenExr),
+                Format::Exr => {
+                    let values = match layer {
+                        Layer::Color => color.take(),
+                        Layer::Depth => depth.take(),
+                        Layer::Normals => normals.take(),
+                        Layer::Classify => None,
+                    };
+                    ImageBuffer::<Rgb<f32>, _>::from_raw(w, h, values.unwrap_or_default())
+                        .ok_or("image size mismatch")
+                        .map_err(|e| err(&e))?
+                        .save_with_format(path, ImageFormat::OpenExr)
+                }
                 Format::Png => continue,
             };
             result.map_err(|e| err(&e))?;
