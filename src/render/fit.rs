@@ -38,6 +38,16 @@ pub const FILL: f64 = 0.8;
 /// interval arithmetic proves there is no such point. Axes that no object
 /// uses are not subdivided: the solid spans the bounds along them.
 pub fn solid_box(scene: &Scene, evaluators: &[Arc<dyn Evaluator>], depth: u32) -> Option<Bounds> {
+    solid_box_within(scene, evaluators, depth, MAX_REGIONS)
+}
+
+// [`solid_box`] evaluating at most `max_regions` cells a level.
+fn solid_box_within(
+    scene: &Scene,
+    evaluators: &[Arc<dyn Evaluator>],
+    depth: u32,
+    max_regions: usize,
+) -> Option<Bounds> {
     let b = scene.bounds;
     let mut split = [false; 3];
     for o in &scene.objects {
@@ -88,7 +98,7 @@ pub fn solid_box(scene: &Scene, evaluators: &[Arc<dyn Evaluator>], depth: u32) -
             undecided.push(*cell);
         }
         let last = d == depth
-            || undecided.len() * (1 << split.iter().filter(|&&s| s).count()) > MAX_REGIONS;
+            || undecided.len() * (1 << split.iter().filter(|&&s| s).count()) > max_regions;
         let mut next = Vec::new();
         for cell in undecided {
             if known.contains_box(&cell) {
@@ -349,6 +359,18 @@ mod tests {
             }
         }
         assert!(found > 100);
+    }
+
+    // Out of budget, the cells left are kept whole: looser, still sound.
+    #[test]
+    fn a_small_budget_stays_sound() {
+        let (s, e) = scene(vec![sphere([0.3, 0.2, -0.4], 0.5)]);
+        let tight = solid_box(&s, &e, FIT_DEPTH).unwrap();
+        let loose = solid_box_within(&s, &e, FIT_DEPTH, 64).unwrap();
+        for i in 0..3 {
+            assert!(loose.min[i] <= tight.min[i] && tight.max[i] <= loose.max[i]);
+        }
+        assert!(loose.max[0] - loose.min[0] > tight.max[0] - tight.min[0]);
     }
 
     #[test]
