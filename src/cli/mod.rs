@@ -6,9 +6,12 @@ pub mod accuracy;
 pub mod bench;
 pub mod eval;
 pub mod export;
+pub mod formats;
 pub mod ir;
 pub mod png_stream;
+pub mod progress;
 pub mod render;
+pub mod view;
 pub mod watch;
 
 pub use ibeam::eval::{EvalKind, build_evaluator, build_evaluators};

@@ -2,14 +2,15 @@
 
 use std::fmt;
 use std::fs::OpenOptions;
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use super::formats::{Format, Gathered, format_of, parse_bit_depth};
 use super::png_stream::{Layer, write_pngs};
+use super::progress::Bar;
+use super::view::ViewArgs;
 use super::{CliError, EvalKind};
 use ibeam::render::aa::{DEFAULT_DEPTH, DEFAULT_THRESHOLD, MAX_DEPTH};
-use ibeam::render::camera::RayCamera;
 use ibeam::render::{Aa, Frame, MAX_SIZE, Method, RenderOptions};
 
 /// Visibility method on the command line.
@@ -47,13 +48,29 @@ impl fmt::Display for MethodArg {
 }
 
 /// Arguments of `ibeam render`.
-#[derive(clap::Args, Debug, Clone)]
+#[derive(clap::Args, Clone, Debug)]
 pub struct Args {
     /// Scene file (`.ib`) or Fidget model (`.vm`).
     pub file: PathBuf,
-    /// Output PNG (8-bit sRGB).
+    /// Output image; its extension picks the format: `.png` (8-bit sRGB,
+    /// streamed in bands, or 16-bit with --bit-depth 16) or `.exr` (32-bit
+    /// float linear colour). 16-bit and EXR images are held whole in
+    /// memory (6 or 12 bytes a pixel) until written.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Bits per channel of a `.png` colour output: 8 or 16 (sRGB either way).
+    #[arg(long, default_value = "8", value_parser = parse_bit_depth)]
+    pub bit_depth: u8,
+    /// Camera overrides and framing (boxed: the flags would make every
+    /// subcommand's arguments as big as this one's).
+    #[command(flatten)]
+    pub view: Box<ViewArgs>,
+    /// Every light casts shadows, whatever the scene says.
+    #[arg(long, conflicts_with = "no_shadows")]
+    pub shadows: bool,
+    /// No light casts shadows, whatever the scene says (faster).
+    #[arg(long)]
+    pub no_shadows: bool,
     /// Image size as WxH (default: the scene's); cost grows with the pixels.
     #[arg(long, value_parser = parse_size)]
     pub size: Option<(u32, u32)>,
@@ -87,13 +104,17 @@ pub struct Args {
     /// Evaluator: native code (default) or the reference interpreter.
     #[arg(long = "eval", value_enum, default_value_t = EvalKind::Jit)]
     pub eval: EvalKind,
-    /// Also write a 16-bit depth PNG: the distance along the view
-    /// direction, mapped linearly from the nearest (0) to the farthest
-    /// (65534) point of the scene bounds; background 65535. The range is
-    /// the bounds', not the hits', so it is fixed before tracing.
+    /// Also write a depth image of the distance along the view direction.
+    /// `.png`: 16-bit grey, mapped linearly from the nearest (0) to the
+    /// farthest (65534) point of the scene bounds, background 65535 (the
+    /// range is the bounds', not the hits', so it is fixed before
+    /// tracing). `.exr`: that distance as a float in all three channels,
+    /// background +inf (held in memory).
     #[arg(long)]
     pub depth: Option<PathBuf>,
-    /// Also write a normal map PNG ((n + 1) / 2).
+    /// Also write a normal map: `.png` as (n + 1) / 2, 8-bit, black where
+    /// nothing was hit; `.exr` the raw unit normal's x, y, z as floats,
+    /// 0 where nothing was hit (held in memory).
     #[arg(long)]
     pub normals: Option<PathBuf>,
     /// Also write a PNG of how each pixel was decided (blue rejected,
@@ -107,7 +128,8 @@ pub struct Args {
     /// and block (slower; for measuring what pruning saves).
     #[arg(long)]
     pub no_prune: bool,
-    /// No progress and no summary.
+    /// No progress bar and no summary (the bar, on stderr, appears only
+    /// on a terminal and after half a second).
     #[arg(long)]
     pub quiet: bool,
 }
@@ -209,6 +231,23 @@ pub fn run_with(
     args: &Args,
     load: impl FnOnce(&Path) -> Result<ibeam::scene::Scene, CliError>,
 ) -> Result<(), CliError> {
+    // Every output's format is checked before any file is created or
+    // anything rendered: a wrong extension costs nothing and leaves nothing.
+    let named = [
+        (Some(&args.output), Layer::Color, "-o"),
+        (args.depth.as_ref(), Layer::Depth, "--depth"),
+        (args.normals.as_ref(), Layer::Normals, "--normals"),
+        (args.classify.as_ref(), Layer::Classify, "--classify"),
+    ];
+    let mut streamed: Vec<(&Path, Layer)> = Vec::new();
+    let mut whole = Vec::new();
+    for (path, layer, flag) in named {
+        let Some(path) = path else { continue };
+        match format_of(path, flag, layer, args.bit_depth)? {
+            Format::Png => streamed.push((path, layer)),
+            f => whole.push((path.clone(), layer, f)),
+        }
+    }
     let mut outputs = Outputs {
         created: Vec::new(),
         done: false,
@@ -217,7 +256,7 @@ pub fn run_with(
     for p in std::iter::once(&args.output).chain(extra.into_iter().flatten()) {
         outputs.claim(p)?;
     }
-    let scene = load(&args.file)?;
+    let mut scene = load(&args.file)?;
     if scene.objects.is_empty() {
         return Err(format!("{}: the scene has no objects", args.file.display()).into());
     }
@@ -225,15 +264,30 @@ pub fn run_with(
     if width == 0 || height == 0 || width > MAX_SIZE || height > MAX_SIZE {
         return Err(format!("image size {width}x{height} is invalid (1..={MAX_SIZE})").into());
     }
-    RayCamera::new(&scene.camera, width, height)
-        .map_err(|e| format!("{}: bad camera: {e}", args.file.display()))?;
+    if args.shadows || args.no_shadows {
+        for light in &mut scene.lights {
+            light.shadows = args.shadows;
+        }
+    }
 
     // The JIT compiles lazily, on first use of each evaluator kind: this
-    // times building the evaluators, and the render adds the native code
-    // it compiled.
+    // times building the evaluators plus what framing compiled, and the
+    // render adds the native code it compiled.
     let t = Instant::now();
     let evaluators = super::build_evaluators(&scene, args.eval)?;
     let compile_ms = t.elapsed().as_secs_f64() * 1e3;
+    let compiled = |e: &[std::sync::Arc<dyn ibeam::eval::Evaluator>]| -> f64 {
+        e.iter().map(|e| e.compile_time().as_secs_f64() * 1e3).sum()
+    };
+    let before_view = compiled(&evaluators);
+    args.view.apply(
+        &args.file,
+        &mut scene,
+        &evaluators,
+        (width, height),
+        args.quiet,
+    )?;
+    let compile_ms = compile_ms + compiled(&evaluators) - before_view;
 
     let (aa, method) = aa_and_method(args);
     let opts = RenderOptions {
@@ -244,23 +298,31 @@ pub fn run_with(
         want_depth: args.depth.is_some(),
         want_normals: args.normals.is_some(),
         want_classify: args.classify.is_some(),
-        progress: !args.quiet && std::io::stderr().is_terminal(),
+        // The CLI draws its own bar (`progress::Bar`).
+        progress: false,
         prune: !args.no_prune,
     };
+    let mut gathered = Gathered::new(whole, (width, height));
     // Checked before any output is truncated: a scene that cannot render
     // leaves existing files as they were.
-    let frame = Frame::new(&scene, &evaluators, &opts, aa)?;
-    let layers = [
-        (Some(&args.output), Layer::Color),
-        (args.depth.as_ref(), Layer::Depth),
-        (args.normals.as_ref(), Layer::Normals),
-        (args.classify.as_ref(), Layer::Classify),
-    ];
-    let files: Vec<(&Path, Layer)> = layers
-        .iter()
-        .filter_map(|&(p, l)| Some((p?.as_path(), l)))
-        .collect();
-    let mut stats = write_pngs(&files, (width, height), |sink| frame.stream(sink))?;
+    let mut frame =
+        Frame::new(&scene, &evaluators, &opts, aa)?.with_float_layers(gathered.layers());
+    let bar = Bar::new(args.quiet);
+    if let Some(b) = &bar {
+        frame = frame.with_progress(b.report());
+    }
+    let streamed_result = write_pngs(&streamed, (width, height), |sink| {
+        frame.stream(|band| {
+            sink(band)?;
+            gathered.push(band);
+            Ok(())
+        })
+    });
+    if let Some(b) = &bar {
+        b.finish();
+    }
+    let mut stats = streamed_result?;
+    gathered.write()?;
     stats.compile_ms += compile_ms;
 
     if let Some(p) = &args.stats_json {

@@ -266,13 +266,18 @@ fn render_replacing(
     result
 }
 
-/// `dir/.name.ibeam-watch` for `dir/name`: in the same folder, so the
-/// rename is atomic, and hidden.
+/// `dir/.stem.ibeam-watch.ext` for `dir/stem.ext`: in the same folder, so
+/// the rename is atomic, hidden, and with the destination's extension,
+/// which chooses the image format.
 fn temp_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
+    let stem = path
+        .file_stem()
         .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
-    path.with_file_name(format!(".{name}.ibeam-watch"))
+    let name = match path.extension() {
+        Some(ext) => format!(".{stem}.ibeam-watch.{}", ext.to_string_lossy()),
+        None => format!(".{stem}.ibeam-watch"),
+    };
+    path.with_file_name(name)
 }
 
 #[cfg(test)]
@@ -284,11 +289,11 @@ mod tests {
     fn temporary_files_sit_beside_their_destination() {
         assert_eq!(
             temp_path(Path::new("out/a.png")),
-            PathBuf::from("out/.a.png.ibeam-watch")
+            PathBuf::from("out/.a.ibeam-watch.png")
         );
         assert_eq!(
-            temp_path(Path::new("a.png")),
-            PathBuf::from(".a.png.ibeam-watch")
+            temp_path(Path::new("a.EXR")),
+            PathBuf::from(".a.ibeam-watch.EXR")
         );
     }
 

@@ -10,6 +10,7 @@ use image::Rgb;
 use rayon::prelude::*;
 
 use super::aa::{self, Aa, AaError};
+use super::band::{Band, FloatLayers, band};
 use super::camera::{self, RayCamera};
 use super::stats::RenderStats;
 use super::tile::{TileOut, TileSpec, ms_since, render_tile};
@@ -56,27 +57,13 @@ pub struct Frame<'a> {
     start: Instant,
     // Compile time (total, waited for) before the render, ms.
     compiled_before: (f64, f64),
+    float: FloatLayers,
+    progress: Option<Progress>,
 }
 
-/// Finished image rows `y0..y0 + rows`, each `width` pixels, row-major;
-/// [`Frame::stream`] hands them out top to bottom.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Band {
-    /// First image row of the band.
-    pub y0: u32,
-    /// Rows in the band.
-    pub rows: u32,
-    /// Pixels in a row.
-    pub width: u32,
-    /// The shaded image, 8-bit sRGB, 3 bytes a pixel.
-    pub color: Vec<u8>,
-    /// Depth as [`output::depth_u16`] encodes it, if asked for.
-    pub depth: Option<Vec<u16>>,
-    /// Normals as [`output::normal_pixel`], 3 bytes a pixel, if asked for.
-    pub normals: Option<Vec<u8>>,
-    /// Classification colours, 3 bytes a pixel, if asked for.
-    pub classify: Option<Vec<u8>>,
-}
+/// A caller's progress report: called with (tiles done, tiles in all)
+/// after each tile, from the render's worker threads.
+pub type Progress = Box<dyn Fn(usize, usize) + Send + Sync>;
 
 impl<'a> Frame<'a> {
     /// Checks a render and sets it up (cameras, threads) without tracing.
@@ -119,7 +106,24 @@ impl<'a> Frame<'a> {
             depth_range: output::depth_range(&scene.camera, &scene.bounds),
             start,
             compiled_before,
+            float: FloatLayers::default(),
+            progress: None,
         })
+    }
+
+    /// Makes [`Frame::stream`]'s bands carry the float images `float`
+    /// names as well (for 16-bit and floating-point files).
+    pub fn with_float_layers(mut self, float: FloatLayers) -> Frame<'a> {
+        self.float = float;
+        self
+    }
+
+    /// Reports progress to `report` after each tile, instead of the plain
+    /// counter that [`RenderOptions::progress`] prints (the CLI draws a
+    /// progress bar with it).
+    pub fn with_progress(mut self, report: Progress) -> Frame<'a> {
+        self.progress = Some(report);
+        self
     }
 
     /// The camera's ray parameter range over the scene bounds, which the
@@ -134,7 +138,7 @@ impl<'a> Frame<'a> {
         let all = tiles(self.opts.width, self.opts.height);
         let done = AtomicUsize::new(0);
         let outs = self.trace(&all, &done, all.len());
-        if self.opts.progress {
+        if self.opts.progress && self.progress.is_none() {
             eprintln!();
         }
         let mut out = assemble(&outs, &self.opts, self.bg, self.depth_range);
@@ -182,13 +186,20 @@ impl<'a> Frame<'a> {
             output_ms += written?;
             self.release_groups_above(y0 + TILE);
             let t0 = Instant::now();
-            pending = Some(band(&outs, &self.opts, y0, self.depth_range, &mut stats));
+            pending = Some(band(
+                &outs,
+                &self.opts,
+                self.float,
+                y0,
+                self.depth_range,
+                &mut stats,
+            ));
             output_ms += ms_since(t0);
         }
         if let Some(b) = pending {
             output_ms += emit(b)?;
         }
-        if self.opts.progress {
+        if self.opts.progress && self.progress.is_none() {
             eprintln!();
         }
         stats.output_ms = output_ms;
@@ -233,7 +244,9 @@ impl<'a> Frame<'a> {
                     }
                     anti_alias(tr, self.fine.as_ref(), opts, self.aa, &mut out, bg);
                     let n = done.fetch_add(1, Ordering::Relaxed) + 1;
-                    if opts.progress {
+                    if let Some(report) = &self.progress {
+                        report(n, total);
+                    } else if opts.progress {
                         eprint!("\rrendering: {n}/{total} tiles");
                     }
                     out
@@ -327,52 +340,6 @@ fn tile_row(w: u32, h: u32, y0: u32) -> Vec<(u32, u32, u32, u32)> {
         .collect()
 }
 
-// One row of tiles (`outs`, left to right) as a band of output pixels;
-// merges the tiles' counters, and the band's hit pixels, into `stats` in
-// tile order, as `assemble` does.
-fn band(
-    outs: &[TileOut],
-    opts: &RenderOptions,
-    y0: u32,
-    depth_range: (f64, f64),
-    stats: &mut RenderStats,
-) -> Band {
-    let w = opts.width as usize;
-    let rows = outs.first().map_or(0, |t| t.h);
-    let n = w * rows as usize;
-    let mut b = Band {
-        y0,
-        rows,
-        width: opts.width,
-        color: vec![0; 3 * n],
-        depth: opts.want_depth.then(|| vec![0; n]),
-        normals: opts.want_normals.then(|| vec![0; 3 * n]),
-        classify: opts.want_classify.then(|| vec![0; 3 * n]),
-    };
-    let mut srgb = output::SrgbRun::default();
-    for t in outs {
-        stats.merge(&t.state.stats);
-        for j in 0..t.h {
-            for i in 0..t.w {
-                let src = (j * t.w + i) as usize;
-                let dst = (j as usize) * w + (t.x0 + i) as usize;
-                b.color[3 * dst..3 * dst + 3].copy_from_slice(&srgb.pixel(t.linear[src]).0);
-                stats.pixels_hit += u64::from(t.depth[src].is_finite());
-                if let Some(d) = b.depth.as_mut() {
-                    d[dst] = output::depth_u16(t.depth[src], depth_range);
-                }
-                if let (Some(n), Some(tn)) = (b.normals.as_mut(), t.normals.as_ref()) {
-                    n[3 * dst..3 * dst + 3].copy_from_slice(&tn[src].0);
-                }
-                if let (Some(c), Some(tc)) = (b.classify.as_mut(), t.class.as_ref()) {
-                    c[3 * dst..3 * dst + 3].copy_from_slice(&tc[src].0);
-                }
-            }
-        }
-    }
-    b
-}
-
 // The render's images and counters from its tiles, in tile order (times
 // other than the output's own are left to the caller).
 fn assemble(
@@ -411,7 +378,7 @@ fn assemble(
                 depth_t[dst] = t.depth[src];
                 hit_mask[dst] = t.depth[src].is_finite();
                 if let (Some(n), Some(tn)) = (normals.as_mut(), t.normals.as_ref()) {
-                    n[dst] = tn[src];
+                    n[dst] = output::normal_or_none(tn[src]);
                 }
                 if let (Some(c), Some(tc)) = (class.as_mut(), t.class.as_ref()) {
                     c[dst] = tc[src];
@@ -451,12 +418,13 @@ fn downsample(t: TileOut, s: u32) -> TileOut {
     let mut linear = vec![[0.0; 3]; n];
     let mut coverage = vec![0.0; n];
     let mut depth = vec![f64::INFINITY; n];
-    let pick = |v: &Vec<Rgb<u8>>| -> Vec<Rgb<u8>> {
+    fn pick<T: Copy>(v: &[T], (w, h, s, tw): (u32, u32, u32, u32)) -> Vec<T> {
         (0..h)
             .flat_map(|j| (0..w).map(move |i| (i, j)))
-            .map(|(i, j)| v[((j * s + s / 2) * t.w + i * s + s / 2) as usize])
+            .map(|(i, j)| v[((j * s + s / 2) * tw + i * s + s / 2) as usize])
             .collect()
-    };
+    }
+    let dims = (w, h, s, t.w);
     for j in 0..h {
         for i in 0..w {
             let k = (j * w + i) as usize;
@@ -485,8 +453,8 @@ fn downsample(t: TileOut, s: u32) -> TileOut {
         coverage,
         samples: vec![s * s; n],
         depth,
-        normals: t.normals.as_ref().map(pick),
-        class: t.class.as_ref().map(pick),
+        normals: t.normals.as_deref().map(|v| pick(v, dims)),
+        class: t.class.as_deref().map(|v| pick(v, dims)),
         state: t.state,
     }
 }

@@ -21,19 +21,27 @@
 //! for any thread count: every tile is computed independently and the
 //! results and counters are merged in tile order.
 //!
+//! [`fit`] finds a box guaranteed to hold the solid, and a camera that
+//! frames it.
+//!
 //! Private parts: `frame` checks the options and runs and merges the
-//! tiles; `tile` traces one (visibility, shadow beams, shading); `tracer`
-//! holds the state every tile reads and the state each tile carries (its
+//! tiles; `band` turns a row of tiles into a streamed band of images;
+//! `tile` traces one (visibility, shadow beams, shading); `tracer` holds
+//! the state every tile reads and the state each tile carries (its
 //! counters and the mean-value policy's record); `probe` has the beam
 //! tests that [`beam`] and [`aa`] share.
 //!
 //! [`Frame::stream`] is the bounded-memory path: it traces one row of
 //! tiles at a time and hands out finished bands of image rows, which the
-//! CLI encodes into PNGs as they come.
+//! CLI encodes into PNGs as they come (and, with
+//! [`Frame::with_float_layers`], the float values 16-bit PNGs and
+//! OpenEXR files are made from).
 
 pub mod aa;
+mod band;
 pub mod beam;
 pub mod camera;
+pub mod fit;
 mod frame;
 mod groups;
 pub mod output;
@@ -49,8 +57,9 @@ mod tracer;
 use image::{ImageBuffer, Luma, RgbImage};
 
 pub use aa::{Aa, AaError};
+pub use band::{Band, FloatLayers};
 use camera::CameraError;
-pub use frame::{Band, Frame, render, render_aa};
+pub use frame::{Frame, Progress, render, render_aa};
 pub use stats::RenderStats;
 pub use tracer::is_flat;
 
@@ -91,7 +100,8 @@ pub struct RenderOptions {
     pub want_normals: bool,
     /// Produce a map of how each pixel was decided.
     pub want_classify: bool,
-    /// Print tile progress on stderr.
+    /// Print a plain tile counter on stderr (unless a caller's report
+    /// replaces it, see [`Frame::with_progress`]).
     pub progress: bool,
     /// Prune large functions to each tile and block (see
     /// [`crate::ir::prune`]); off only to measure what it saves.

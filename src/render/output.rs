@@ -82,6 +82,20 @@ fn srgb_u8_formula(c: f64) -> u8 {
     (s * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
 }
 
+/// Encodes one linear channel in [0, 1] as 16-bit sRGB (NaN as 0, values
+/// outside clamped): the transfer function itself, rounded to the nearest
+/// code. Only the 16-bit PNG uses it, so it need not be as fast as
+/// [`srgb_u8`]'s table.
+pub fn srgb_u16(c: f64) -> u16 {
+    let c = if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) };
+    let s = if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    };
+    (s * 65535.0 + 0.5).floor().clamp(0.0, 65535.0) as u16
+}
+
 /// An 8-bit sRGB pixel from linear RGB.
 pub fn srgb_pixel(c: [f64; 3]) -> Rgb<u8> {
     Rgb([srgb_u8(c[0]), srgb_u8(c[1]), srgb_u8(c[2])])
@@ -172,6 +186,11 @@ pub fn normal_pixel(n: Option<[f64; 3]>) -> Rgb<u8> {
     }
 }
 
+/// [`normal_pixel`] of a tile's normal, whose NaN marks no hit.
+pub fn normal_or_none(n: [f64; 3]) -> Rgb<u8> {
+    normal_pixel((!n[0].is_nan()).then_some(n))
+}
+
 /// Builds an RGB image from a row-major pixel vector.
 pub fn rgb_image(w: u32, h: u32, px: &[Rgb<u8>]) -> RgbImage {
     ImageBuffer::from_fn(w, h, |x, y| px[(y * w + x) as usize])
@@ -204,6 +223,20 @@ mod tests {
         for c in probes {
             assert_eq!(srgb_u8(c), srgb_u8_formula(c), "at {c:e}");
         }
+    }
+
+    // 16-bit codes are the 8-bit ones times 257 within rounding.
+    #[test]
+    fn srgb_u16_agrees_with_u8() {
+        for i in 0..=1000 {
+            let c = f64::from(i) / 1000.0;
+            let (a, b) = (i32::from(srgb_u16(c)), i32::from(srgb_u8(c)));
+            assert!((a - b * 257).abs() <= 257, "at {c}: {a} vs {b}");
+        }
+        assert_eq!(srgb_u16(f64::NAN), 0);
+        assert_eq!(srgb_u16(2.0), 65535);
+        assert_eq!(normal_or_none([f64::NAN; 3]), Rgb([0, 0, 0]));
+        assert_eq!(normal_or_none([0.0, 0.0, 1.0]), Rgb([128, 128, 255]));
     }
 
     #[test]

@@ -8,7 +8,7 @@ use image::Rgb;
 use super::beam::{self, TileRays};
 use super::shade::{self, Surf};
 use super::tracer::{PrunedEvals, TileState, Tracer};
-use super::{Class, Method, RenderOptions, output, ray};
+use super::{Class, Method, RenderOptions, ray};
 use crate::interval::Interval;
 
 /// Which pixels of the traced image a tile covers.
@@ -47,8 +47,10 @@ pub(crate) struct TileOut {
     /// Ray parameter of the hit, +inf for none (the in-memory render holds
     /// every tile at once; the streaming one a row of tiles).
     pub depth: Vec<f64>,
-    /// Normal image pixels, if asked for.
-    pub normals: Option<Vec<Rgb<u8>>>,
+    /// Unit normals, if asked for; NaN where nothing was hit (kept as
+    /// f64 so that float outputs get them raw and the 8-bit image's bytes
+    /// are [`super::output::normal_pixel`]'s of the same values as before).
+    pub normals: Option<Vec<[f64; 3]>>,
     /// Classification image pixels, if asked for.
     pub class: Option<Vec<Rgb<u8>>>,
     /// Counters and the mean-value record, which anti-aliasing carries on.
@@ -257,7 +259,7 @@ fn shadow_beams(
 struct Lit {
     linear: Vec<[f64; 3]>,
     shadowed: Vec<u64>,
-    normals: Option<Vec<Rgb<u8>>>,
+    normals: Option<Vec<[f64; 3]>>,
 }
 
 // Lights every hit (the background elsewhere), with per-pixel shadow
@@ -275,7 +277,7 @@ fn shade_pixels(
     let (n, nl) = (surfs.len(), tr.lights.len());
     let mut linear = vec![background; n];
     let mut shadowed = vec![0u64; n];
-    let mut normals = opts.want_normals.then(|| vec![Rgb([0u8; 3]); n]);
+    let mut normals = opts.want_normals.then(|| vec![[f64::NAN; 3]; n]);
     let mut shadow_ms = 0.0;
     // Reading the clock twice per pixel costs more than shading a pixel
     // without shadows: only pixels with shadow segments to trace are timed.
@@ -288,7 +290,7 @@ fn shade_pixels(
             linear[k] = c.to_array();
             shadowed[k] = sh;
             if let Some(nv) = normals.as_mut() {
-                nv[k] = output::normal_pixel(Some(s.n.to_array()));
+                nv[k] = s.n.to_array();
             }
         }
     }

@@ -1,12 +1,15 @@
 //! End-to-end tests of the `ibeam` binary: `ibeam render` on the examples
 //! writes PNGs, and every load or argument error exits with a message on
 //! stderr and a non-zero code, never a panic (exit code 101); `ibeam ir`
-//! and `ibeam eval` in [`ir`]. One test binary.
+//! and `ibeam eval` in [`ir`]; output formats in [`formats`]; camera,
+//! shadow and progress flags in [`view`]. One test binary.
 
 #[path = "../common/mod.rs"]
 mod common;
 mod export;
+mod formats;
 mod ir;
+mod view;
 mod watch;
 
 use common::{ibeam, stderr};

@@ -1,0 +1,434 @@
+//! Framing the solid itself: a box guaranteed to contain every point of
+//! the bounds where the scene function is ≤ 0 ([`solid_box`]), found by
+//! interval subdivision, and a camera that looks at it ([`frame_box`]).
+//!
+//! The box is sound because a region is dropped only when interval
+//! arithmetic proves f > 0 (or f undefined) everywhere in it, or when it
+//! lies inside the hull of points already known to be solid, which the
+//! answer contains anyway. It is tight to about one cell of the finest
+//! level: the regions kept at that level are cells of side
+//! `bounds / 2^depth`, and each holds a point where interval arithmetic
+//! could not exclude f ≤ 0.
+
+use std::sync::Arc;
+
+use glam::DVec3;
+
+use super::camera::normalize;
+use crate::eval::Evaluator;
+use crate::eval::interp::Interpreter;
+use crate::interval::Interval;
+use crate::scene::{Bounds, Camera, Projection, Scene};
+
+/// Levels of subdivision [`solid_box`] goes down by default: cells of
+/// 1/256 of the bounds, a fit within about 1% of the image.
+pub const FIT_DEPTH: u32 = 8;
+
+/// Most regions [`solid_box`] evaluates at one level; beyond it the
+/// regions left are kept whole (still sound, less tight), which bounds
+/// the cost on surfaces interval arithmetic cannot tell from solid.
+pub const MAX_REGIONS: usize = 1 << 16;
+
+/// Share of the image the framed box fills along its tighter side.
+pub const FILL: f64 = 0.8;
+
+/// An axis-aligned box that contains every point of `scene.bounds` where
+/// the scene function (the minimum over the objects, `evaluators[i]`
+/// evaluating object i) is ≤ 0, subdividing `depth` levels; `None` when
+/// interval arithmetic proves there is no such point. Axes that no object
+/// uses are not subdivided: the solid spans the bounds along them.
+pub fn solid_box(scene: &Scene, evaluators: &[Arc<dyn Evaluator>], depth: u32) -> Option<Bounds> {
+    solid_box_within(scene, evaluators, depth, MAX_REGIONS)
+}
+
+// [`solid_box`] evaluating at most `max_regions` cells a level.
+fn solid_box_within(
+    scene: &Scene,
+    evaluators: &[Arc<dyn Evaluator>],
+    depth: u32,
+    max_regions: usize,
+) -> Option<Bounds> {
+    let b = scene.bounds;
+    let mut split = [false; 3];
+    for o in &scene.objects {
+        for (s, u) in split.iter_mut().zip(o.function.uses_vars()) {
+            *s |= u;
+        }
+    }
+    // The interpreter answers without compiling: a large function's
+    // native interval code would cost more to compile than the few
+    // thousand cells cost to interpret (the render itself runs pruned
+    // tapes, not that code).
+    let interpreted: Vec<Arc<dyn Evaluator>> = evaluators
+        .iter()
+        .map(|e| match e.function() {
+            Some(f) => Arc::new(Interpreter::new(f.clone())) as Arc<dyn Evaluator>,
+            None => Arc::clone(e),
+        })
+        .collect();
+    let evaluators = &interpreted[..];
+    let mut level: Vec<[Interval; 3]> =
+        vec![std::array::from_fn(|i| Interval::new(b.min[i], b.max[i]))];
+    // `known` holds points shown to be solid (cell centres where f ≤ 0 and
+    // whole cells where f ≤ 0 throughout); `kept` the cells kept at the end.
+    let mut known = Hull::default();
+    let mut kept = Hull::default();
+    let mut vals = Vec::new();
+    let mut centre_vals = Vec::new();
+    for d in 0..=depth {
+        let (lo, hi) = bounds_over(evaluators, &level, &mut vals);
+        let centres = centres_over(evaluators, &level, &mut centre_vals);
+        let mut undecided = Vec::new();
+        for (k, cell) in level.iter().enumerate() {
+            if lo[k] > 0.0 {
+                // f > 0 (or undefined) over the whole cell: no solid here.
+                continue;
+            }
+            if hi[k] <= 0.0 {
+                known.add_box(cell);
+                continue;
+            }
+            if centres[k] <= 0.0 {
+                // Along an axis no object uses, f is the same over the
+                // cell's whole extent, so that segment is solid.
+                let lo = std::array::from_fn(|i| if split[i] { cell[i].mid() } else { cell[i].lo });
+                let hi = std::array::from_fn(|i| if split[i] { cell[i].mid() } else { cell[i].hi });
+                known.add(lo, hi);
+            }
+            undecided.push(*cell);
+        }
+        let last = d == depth
+            || undecided.len() * (1 << split.iter().filter(|&&s| s).count()) > max_regions;
+        let mut next = Vec::new();
+        for cell in undecided {
+            if known.contains_box(&cell) {
+                continue;
+            }
+            if last {
+                kept.add_box(&cell);
+            } else {
+                subdivide(&cell, split, &mut next);
+            }
+        }
+        if last {
+            break;
+        }
+        level = next;
+    }
+    let all = kept.union(&known);
+    all.min.map(|min| Bounds {
+        min,
+        max: all.max.map_or(min, |m| m),
+    })
+}
+
+// The lower and upper bounds of the scene function (the minimum over the
+// objects) over each cell; EMPTY intervals (f undefined) count as +inf.
+fn bounds_over(
+    evaluators: &[Arc<dyn Evaluator>],
+    cells: &[[Interval; 3]],
+    scratch: &mut Vec<Interval>,
+) -> (Vec<f64>, Vec<f64>) {
+    let mut lo = vec![f64::INFINITY; cells.len()];
+    let mut hi = vec![f64::INFINITY; cells.len()];
+    for e in evaluators {
+        scratch.clear();
+        scratch.resize(cells.len(), Interval::EMPTY);
+        e.interval_batch(cells, scratch);
+        for (k, v) in scratch.iter().enumerate() {
+            if !v.is_empty() {
+                lo[k] = lo[k].min(v.lo);
+                hi[k] = hi[k].min(v.hi);
+            }
+        }
+    }
+    (lo, hi)
+}
+
+// The scene function at each cell's centre (NaN counts as +inf).
+fn centres_over(
+    evaluators: &[Arc<dyn Evaluator>],
+    cells: &[[Interval; 3]],
+    scratch: &mut Vec<f64>,
+) -> Vec<f64> {
+    let coord = |i: usize| -> Vec<f64> { cells.iter().map(|c| c[i].mid()).collect() };
+    let (xs, ys, zs) = (coord(0), coord(1), coord(2));
+    let mut out = vec![f64::INFINITY; cells.len()];
+    for e in evaluators {
+        scratch.clear();
+        scratch.resize(cells.len(), f64::NAN);
+        e.point_batch(&xs, &ys, &zs, scratch);
+        for (o, &v) in out.iter_mut().zip(scratch.iter()) {
+            if v <= *o {
+                *o = v;
+            }
+        }
+    }
+    out
+}
+
+// Halves `cell` along each axis in `split`, appending the children.
+fn subdivide(cell: &[Interval; 3], split: [bool; 3], out: &mut Vec<[Interval; 3]>) {
+    let start = out.len();
+    out.push(*cell);
+    for (i, &s) in split.iter().enumerate() {
+        if !s {
+            continue;
+        }
+        for k in start..out.len() {
+            let c = out[k][i];
+            let m = c.mid();
+            out[k][i] = Interval::new(c.lo, m);
+            let mut other = out[k];
+            other[i] = Interval::new(m, c.hi);
+            out.push(other);
+        }
+    }
+}
+
+// The hull of some points and boxes (none yet: `min` is None).
+#[derive(Clone, Copy, Debug, Default)]
+struct Hull {
+    min: Option<[f64; 3]>,
+    max: Option<[f64; 3]>,
+}
+
+impl Hull {
+    fn add_box(&mut self, b: &[Interval; 3]) {
+        self.add(b.map(|i| i.lo), b.map(|i| i.hi));
+    }
+
+    fn add(&mut self, lo: [f64; 3], hi: [f64; 3]) {
+        let min = self.min.unwrap_or(lo);
+        let max = self.max.unwrap_or(hi);
+        self.min = Some(std::array::from_fn(|i| min[i].min(lo[i])));
+        self.max = Some(std::array::from_fn(|i| max[i].max(hi[i])));
+    }
+
+    fn contains_box(&self, b: &[Interval; 3]) -> bool {
+        match (self.min, self.max) {
+            (Some(min), Some(max)) => (0..3).all(|i| min[i] <= b[i].lo && b[i].hi <= max[i]),
+            _ => false,
+        }
+    }
+
+    fn union(&self, o: &Hull) -> Hull {
+        let mut h = *self;
+        if let (Some(lo), Some(hi)) = (o.min, o.max) {
+            h.add(lo, hi);
+        }
+        h
+    }
+}
+
+/// `cam` aimed at the centre of `b` along its own view direction, with
+/// its up vector and projection kind, and distanced (perspective) or
+/// sized (orthographic) so that `b` fills [`FILL`] of a `width × height`
+/// image along its tighter side. An orthographic eye is put outside `b`,
+/// where rays start. `None` when `cam` has no view direction.
+pub fn frame_box(cam: &Camera, b: &Bounds, width: u32, height: u32) -> Option<Camera> {
+    let eye = DVec3::from_array(cam.eye);
+    let w = normalize(DVec3::from_array(cam.target) - eye)?;
+    let u = normalize(w.cross(DVec3::from_array(cam.up)))?;
+    let v = u.cross(w);
+    let centre = (DVec3::from_array(b.min) + DVec3::from_array(b.max)) * 0.5;
+    let mut half = (DVec3::from_array(b.max) - DVec3::from_array(b.min)) * 0.5;
+    // A box of no extent (a solid too thin to split) still gets a view.
+    let floor = 1e-6 * half.length().max(1e-3);
+    half = half.max(DVec3::splat(floor));
+    let radius = half.length();
+    let aspect = f64::from(width) / f64::from(height.max(1));
+    let corners = (0..8).map(|k| {
+        let s = DVec3::new(
+            if k & 1 == 0 { -1.0 } else { 1.0 },
+            if k & 2 == 0 { -1.0 } else { 1.0 },
+            if k & 4 == 0 { -1.0 } else { 1.0 },
+        );
+        let c = half * s;
+        (c.dot(u).abs(), c.dot(v).abs(), c.dot(w))
+    });
+    let (projection, distance) = match cam.projection {
+        Projection::Perspective { fov_deg } => {
+            let tv = (fov_deg.to_radians() * 0.5).tan() * FILL;
+            let th = tv * aspect;
+            // Each corner at lateral offsets (x, y) and depth z past the
+            // centre must lie within the shrunken view: x / (d + z) ≤ th.
+            let d = corners
+                .map(|(x, y, z)| (x / th).max(y / tv) - z)
+                .fold(radius * 1.0001, f64::max);
+            (cam.projection, d)
+        }
+        Projection::Orthographic { .. } => {
+            let (x, y) = corners.fold((0.0f64, 0.0f64), |(a, b), (x, y, _)| (a.max(x), b.max(y)));
+            let width = (2.0 * x).max(2.0 * y * aspect) / FILL;
+            (Projection::Orthographic { width }, 2.0 * radius)
+        }
+    };
+    Some(Camera {
+        eye: (centre - w * distance).to_array(),
+        target: centre.to_array(),
+        up: cam.up,
+        projection,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ir::{BinaryOp, Builder, Function, Var};
+    use crate::scene::{Light, Object, RenderSettings};
+
+    // x² + y² + z² - r² around `c`.
+    fn sphere(c: [f64; 3], r: f64) -> Function {
+        let mut b = Builder::new();
+        let mut sum = None;
+        for (i, var) in [Var::X, Var::Y, Var::Z].into_iter().enumerate() {
+            let x = b.var(var);
+            let k = b.constant(c[i]);
+            let d = b.binary(BinaryOp::Sub, x, k);
+            let sq = b.binary(BinaryOp::Mul, d, d);
+            sum = Some(match sum {
+                None => sq,
+                Some(s) => b.binary(BinaryOp::Add, s, sq),
+            });
+        }
+        let r2 = b.constant(r * r);
+        let f = b.binary(BinaryOp::Sub, sum.unwrap(), r2);
+        b.finish(f)
+    }
+
+    fn scene(functions: Vec<Function>) -> (Scene, Vec<Arc<dyn Evaluator>>) {
+        let evals = functions
+            .iter()
+            .map(|f| Arc::new(Interpreter::new(f.clone())) as Arc<dyn Evaluator>)
+            .collect();
+        let objects = functions
+            .into_iter()
+            .enumerate()
+            .map(|(i, function)| Object {
+                name: format!("o{i}"),
+                function,
+                color: [1.0; 3],
+            })
+            .collect();
+        let s = Scene {
+            objects,
+            camera: Camera::default(),
+            lights: vec![Light::default_light()],
+            bounds: Bounds::default(),
+            render: RenderSettings::default(),
+        };
+        (s, evals)
+    }
+
+    #[test]
+    fn sphere_box_is_tight() {
+        let (s, e) = scene(vec![sphere([0.5, -0.25, 0.0], 0.6)]);
+        let b = solid_box(&s, &e, FIT_DEPTH).unwrap();
+        let c = [0.5, -0.25, 0.0];
+        for (i, ci) in c.into_iter().enumerate() {
+            // Sound: the true extent is inside; tight: within 10% of it.
+            assert!(b.min[i] <= ci - 0.6 && b.max[i] >= ci + 0.6, "{b:?}");
+            assert!((b.max[i] - b.min[i]) <= 1.2 * 1.1, "{b:?}");
+        }
+    }
+
+    // Every sampled point where f ≤ 0 lies in the box, for a union of two
+    // spheres (one partly outside the bounds).
+    #[test]
+    fn box_contains_every_sampled_solid_point() {
+        let (s, e) = scene(vec![
+            sphere([-1.0, 0.3, 0.2], 0.4),
+            sphere([1.6, 1.5, -0.5], 0.7),
+        ]);
+        let b = solid_box(&s, &e, 5).unwrap();
+        let mut found = 0;
+        let n = 40;
+        for i in 0..=n {
+            for j in 0..=n {
+                for k in 0..=n {
+                    let p = [i, j, k].map(|t| -2.0 + 4.0 * f64::from(t) / f64::from(n));
+                    if e.iter().any(|e| e.point(p) <= 0.0) {
+                        found += 1;
+                        assert!(
+                            (0..3).all(|a| b.min[a] <= p[a] && p[a] <= b.max[a]),
+                            "{p:?} {b:?}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(found > 100);
+    }
+
+    // Out of budget, the cells left are kept whole: looser, still sound.
+    #[test]
+    fn a_small_budget_stays_sound() {
+        let (s, e) = scene(vec![sphere([0.3, 0.2, -0.4], 0.5)]);
+        let tight = solid_box(&s, &e, FIT_DEPTH).unwrap();
+        let loose = solid_box_within(&s, &e, FIT_DEPTH, 64).unwrap();
+        for i in 0..3 {
+            assert!(loose.min[i] <= tight.min[i] && tight.max[i] <= loose.max[i]);
+        }
+        assert!(loose.max[0] - loose.min[0] > tight.max[0] - tight.min[0]);
+    }
+
+    #[test]
+    fn no_solid_in_the_bounds_gives_none() {
+        let (s, e) = scene(vec![sphere([5.0, 5.0, 5.0], 1.0)]);
+        assert!(solid_box(&s, &e, FIT_DEPTH).is_none());
+    }
+
+    // A function of x and y only spans the bounds along z.
+    #[test]
+    fn unused_axes_span_the_bounds() {
+        let mut b = Builder::new();
+        let x = b.var(Var::X);
+        let y = b.var(Var::Y);
+        let x2 = b.binary(BinaryOp::Mul, x, x);
+        let y2 = b.binary(BinaryOp::Mul, y, y);
+        let s = b.binary(BinaryOp::Add, x2, y2);
+        let one = b.constant(1.0);
+        let f = b.binary(BinaryOp::Sub, s, one);
+        let (s, e) = scene(vec![b.finish(f)]);
+        let bx = solid_box(&s, &e, FIT_DEPTH).unwrap();
+        assert_eq!((bx.min[2], bx.max[2]), (-2.0, 2.0));
+        assert!(bx.max[0] >= 1.0 && bx.max[0] < 1.1, "{bx:?}");
+    }
+
+    #[test]
+    fn framing_keeps_the_direction_and_fills_the_view() {
+        let b = Bounds {
+            min: [-1.0; 3],
+            max: [1.0; 3],
+        };
+        let cam = Camera {
+            eye: [0.0, 0.0, 10.0],
+            ..Camera::default()
+        };
+        let f = frame_box(&cam, &b, 100, 100).unwrap();
+        assert_eq!(f.target, [0.0; 3]);
+        assert!(f.eye[0] == 0.0 && f.eye[1] == 0.0 && f.eye[2] > 1.0);
+        // The front face (z = 1) spans 80% of the 40° view.
+        let half = (20f64).to_radians().tan() * FILL;
+        assert!((1.0 / (f.eye[2] - 1.0) - half).abs() < 1e-9, "{f:?}");
+        let ortho = Camera {
+            projection: Projection::Orthographic { width: 1.0 },
+            ..cam
+        };
+        let f = frame_box(&ortho, &b, 200, 100).unwrap();
+        // Height 2 must fill 80% of width / 2.
+        assert_eq!(
+            f.projection,
+            Projection::Orthographic {
+                width: 2.0 * 2.0 / FILL
+            }
+        );
+        assert!(f.eye[2] > 1.0);
+        let none = Camera {
+            target: cam.eye,
+            ..cam
+        };
+        assert!(frame_box(&none, &b, 10, 10).is_none());
+    }
+}
