@@ -102,9 +102,10 @@ impl Variant {
 }
 
 /// The default sweep: point sampling at 16, 64 and 256 steps, the pixel
-/// and beam methods, beam + grid:2 and grid:4, and beam + IAA (depth 2) at
-/// thresholds 1 (every included pixel is smooth: geometry alone decides),
-/// 1/4, 1/16 and 1/64.
+/// and beam methods, beam + grid:2, grid:4 and grid:8, and beam + IAA at
+/// depth 2 (up to 16 samples a pixel) with thresholds 1 (every included
+/// pixel is smooth: geometry alone decides), 1/4, 1/16 and 1/64, and at
+/// depth 3 (up to 64, grid:8's sample positions) with 1/16 and 1/64.
 pub fn default_variants() -> Vec<Variant> {
     let mut v = Vec::new();
     for steps in [16, 64, 256] {
@@ -117,7 +118,7 @@ pub fn default_variants() -> Vec<Variant> {
     }
     v.push(Variant::new(Family::Pixel, "", Method::Pixel, Aa::None));
     v.push(Variant::new(Family::Beam, "", Method::Beam, Aa::None));
-    for n in [2, 4] {
+    for n in [2, 4, 8] {
         v.push(Variant::new(
             Family::BeamGrid,
             &format!("grid:{n}"),
@@ -136,7 +137,63 @@ pub fn default_variants() -> Vec<Variant> {
             },
         ));
     }
+    for d in [16u32, 64] {
+        v.push(Variant::new(
+            Family::BeamIaa,
+            &format!("t=1/{d} depth=3"),
+            Method::Beam,
+            Aa::Iaa {
+                threshold: 1.0 / f64::from(d),
+                depth: 3,
+            },
+        ));
+    }
     v
+}
+
+/// IAA against one grid setting on one scene: the fastest IAA render whose
+/// RMSE is at most the grid's, and the ratio of their times.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IaaVersusGrid {
+    /// Scene name.
+    pub scene: String,
+    /// The grid's parameter (`grid:4`).
+    pub grid: String,
+    /// The grid's time, ms, and RMSE.
+    pub grid_time_ms: f64,
+    /// The grid's RMSE.
+    pub grid_rmse: f64,
+    /// The fastest IAA at or below that RMSE (its parameter, time, RMSE),
+    /// if any IAA setting reaches it.
+    pub iaa: Option<(String, f64, f64)>,
+}
+
+impl IaaVersusGrid {
+    /// IAA's time over the grid's, when IAA reaches the grid's error.
+    pub fn ratio(&self) -> Option<f64> {
+        self.iaa.as_ref().map(|(_, t, _)| t / self.grid_time_ms)
+    }
+}
+
+/// For each scene and each grid setting in `rows`, what IAA costs to reach
+/// the grid's error (the targets are stated this way).
+pub fn iaa_versus_grid(rows: &[AccuracyRow]) -> Vec<IaaVersusGrid> {
+    let mut out = Vec::new();
+    for g in rows.iter().filter(|r| r.family == Family::BeamGrid) {
+        let iaa = rows
+            .iter()
+            .filter(|r| r.scene == g.scene && r.family == Family::BeamIaa && r.rmse <= g.rmse)
+            .min_by(|a, b| a.time_ms.total_cmp(&b.time_ms))
+            .map(|r| (r.param.clone(), r.time_ms, r.rmse));
+        out.push(IaaVersusGrid {
+            scene: g.scene.clone(),
+            grid: g.param.clone(),
+            grid_time_ms: g.time_ms,
+            grid_rmse: g.rmse,
+            iaa,
+        });
+    }
+    out
 }
 
 /// One line of `accuracy.csv`.
@@ -392,6 +449,9 @@ mod tests {
             "beam",
             "beam+grid",
             "beam+grid",
+            "beam+grid",
+            "beam+iaa",
+            "beam+iaa",
             "beam+iaa",
             "beam+iaa",
             "beam+iaa",
@@ -399,6 +459,31 @@ mod tests {
         ];
         assert_eq!(names, want);
         assert_eq!(Family::Reference.to_string(), "reference");
+    }
+
+    // The fastest IAA at or below each grid's RMSE, none when no IAA
+    // setting is that accurate.
+    #[test]
+    fn iaa_is_compared_at_each_grids_error() {
+        let mk = |family: Family, param: &str, time_ms: f64, rmse: f64| AccuracyRow {
+            family,
+            param: param.into(),
+            time_ms,
+            rmse,
+            ..r(0.0, 0.0)
+        };
+        let rows = [
+            mk(Family::BeamGrid, "grid:4", 100.0, 2e-3),
+            mk(Family::BeamGrid, "grid:8", 400.0, 1e-3),
+            mk(Family::BeamIaa, "t=1/4", 20.0, 5e-3),
+            mk(Family::BeamIaa, "t=1/16", 60.0, 1.9e-3),
+            mk(Family::BeamIaa, "t=1/64", 80.0, 1.5e-3),
+        ];
+        let c = iaa_versus_grid(&rows);
+        assert_eq!(c.len(), 2);
+        assert_eq!(c[0].iaa.as_ref().unwrap().0, "t=1/16");
+        assert_eq!(c[0].ratio(), Some(0.6));
+        assert!(c[1].iaa.is_none() && c[1].ratio().is_none());
     }
 
     #[test]

@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 
 use super::{CliError, EvalKind};
-use ibeam::bench::accuracy::run_accuracy;
+use ibeam::bench::accuracy::{iaa_versus_grid, run_accuracy};
 use ibeam::render::MAX_SIZE;
 
 /// Arguments of `ibeam bench accuracy`.
@@ -59,6 +59,30 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             r.samples_mean,
             if r.pareto { "*" } else { "" }
         );
+    }
+    println!();
+    println!(
+        "| scene | grid | grid ms | grid RMSE | fastest IAA at or below that RMSE | IAA ms | IAA RMSE | IAA / grid time |"
+    );
+    println!("|---|---|---:|---:|---|---:|---:|---:|");
+    for c in iaa_versus_grid(&rows) {
+        match &c.iaa {
+            Some((param, t, e)) => println!(
+                "| {} | {} | {:.1} | {:.2e} | {} | {:.1} | {:.2e} | {:.2} |",
+                c.scene,
+                c.grid,
+                c.grid_time_ms,
+                c.grid_rmse,
+                param,
+                t,
+                e,
+                c.ratio().unwrap_or(f64::NAN)
+            ),
+            None => println!(
+                "| {} | {} | {:.1} | {:.2e} | none reaches it | | | |",
+                c.scene, c.grid, c.grid_time_ms, c.grid_rmse
+            ),
+        }
     }
     eprintln!(
         "wrote {} and {}",
