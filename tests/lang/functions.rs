@@ -309,3 +309,23 @@ fn vm_random_ops_are_refused_with_their_line() {
     assert!(e.message.contains("`rand` is not supported"), "{e}");
     assert_eq!((e.line, e.col), (2, 4));
 }
+
+// Every "E.g." example of docs/language.md loads as a formula, so the
+// documentation cannot drift from the language.
+#[test]
+fn documented_examples_load() {
+    let doc = std::fs::read_to_string(root().join("docs/language.md")).unwrap();
+    let mut n = 0;
+    for line in doc.lines() {
+        let Some((_, after)) = line.split_once("E.g. ") else {
+            continue;
+        };
+        for (i, span) in after.split('`').enumerate() {
+            if i % 2 == 1 {
+                function_from_formula(span).unwrap_or_else(|e| panic!("{span}: {e}"));
+                n += 1;
+            }
+        }
+    }
+    assert!(n >= 12, "only {n} examples found");
+}
