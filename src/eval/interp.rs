@@ -139,13 +139,7 @@ impl Arith<Interval> for Reference {
         s.mul(x)
     }
     fn step_grad(&mut self, op: UnaryOp, a: Interval, x: Interval) -> Interval {
-        if a.is_empty() || x.is_empty() {
-            Interval::EMPTY
-        } else if (x.lo == 0.0 && x.hi == 0.0) || !a.may_jump(|v| point_unary(op, v)) {
-            Interval::point(0.0)
-        } else {
-            Interval::ENTIRE
-        }
+        interval_step_grad(op, a, x)
     }
     fn min_grad(&mut self, a: Interval, b: Interval, x: Interval, y: Interval) -> Interval {
         // The op returns a's value at every point of the box when a.hi < b.lo.

@@ -165,6 +165,21 @@ pub fn interval_binary(op: BinaryOp, a: Interval, b: Interval) -> Interval {
     }
 }
 
+/// The interval partial of a step op (`floor`, `ceil`, `round`, `sign`)
+/// of `a` whose partial is `x` (see [`Arith::step_grad`]): `[0, 0]` where
+/// the op is constant over `a` or `a` does not move along the axis, the
+/// whole line where it may jump. The interpreter and the JIT's shim both
+/// call this.
+pub fn interval_step_grad(op: UnaryOp, a: Interval, x: Interval) -> Interval {
+    if a.is_empty() || x.is_empty() {
+        Interval::EMPTY
+    } else if (x.lo == 0.0 && x.hi == 0.0) || !a.may_jump(|v| point_unary(op, v)) {
+        Interval::point(0.0)
+    } else {
+        Interval::ENTIRE
+    }
+}
+
 /// A value's partials (∂/∂x, ∂/∂y, ∂/∂z); `None` is a partial known to be
 /// exactly 0 before evaluation (the JIT emits no code for it; the
 /// interpreter never uses `None` on its inputs).

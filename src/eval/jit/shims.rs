@@ -9,7 +9,9 @@
 //! [`UnaryOp::ALL`] or [`BinaryOp::ALL`] as a const parameter.
 
 use crate::interval::Interval;
-use crate::ir::semantics::{interval_binary, interval_unary, point_binary, point_unary};
+use crate::ir::semantics::{
+    interval_binary, interval_step_grad, interval_unary, point_binary, point_unary,
+};
 use crate::ir::{BinaryOp, UnaryOp};
 
 extern "C" fn point_unary_shim<const OP: usize>(a: f64) -> f64 {
@@ -41,15 +43,11 @@ extern "C" fn interval_step_grad_shim<const OP: usize>(
     xlo: f64,
     xhi: f64,
 ) -> Interval {
-    let (a, x) = (Interval::new(alo, ahi), Interval::new(xlo, xhi));
-    let op = UnaryOp::ALL[OP];
-    if a.is_empty() || x.is_empty() {
-        Interval::EMPTY
-    } else if (x.lo == 0.0 && x.hi == 0.0) || !a.may_jump(|v| point_unary(op, v)) {
-        Interval::point(0.0)
-    } else {
-        Interval::ENTIRE
-    }
+    interval_step_grad(
+        UnaryOp::ALL[OP],
+        Interval::new(alo, ahi),
+        Interval::new(xlo, xhi),
+    )
 }
 extern "C" fn interval_div_zero(alo: f64, ahi: f64, blo: f64, bhi: f64) -> Interval {
     Interval::new(alo, ahi).div_by_zero_part(Interval::new(blo, bhi))
