@@ -11,7 +11,8 @@
 use crate::ir::{BinaryOp, Function, Op, UnaryOp, ValueId, Var};
 use std::fmt::Write;
 
-/// Writes the union (`min`) of `functions` (at least one) as `.vm` text.
+/// Writes the union (`min`) of `functions` as `.vm` text (no ops for an
+/// empty list, which Fidget and ibeam then refuse to load).
 pub fn to_vm(functions: &[Function]) -> String {
     let mut w = VmWriter::default();
     let _ = writeln!(w.out, "# written by ibeam {}", env!("CARGO_PKG_VERSION"));
@@ -20,9 +21,11 @@ pub fn to_vm(functions: &[Function]) -> String {
         .enumerate()
         .map(|(k, f)| w.function(k, f))
         .collect();
-    let mut acc = roots[0].clone();
-    for r in &roots[1..] {
-        acc = w.emit(format!("min {acc} {r}"));
+    let mut roots = roots.into_iter();
+    if let Some(mut acc) = roots.next() {
+        for r in roots {
+            acc = w.emit(format!("min {acc} {r}"));
+        }
     }
     w.out
 }
