@@ -238,16 +238,19 @@ struct Decision {
 
 /// The pixel-area tests of IAA over one tile whose base render is in
 /// `px`: background and smooth pixels are settled in place (background
-/// colour, or the base sample); returns which pixels need sub-samples.
+/// colour, or the base sample); returns which pixels need sub-samples and,
+/// for each of those, the ray parameter before which its whole area was
+/// proven empty (where its sub-samples may start).
 pub(crate) fn classify_tile(
     tr: &Tracer<'_>,
     px: &mut TilePixels<'_>,
     background: [f64; 3],
     threshold: f64,
     st: &mut TileState,
-) -> Vec<bool> {
+) -> (Vec<bool>, Vec<f64>) {
     let n = (px.w * px.h) as usize;
     let mut split = vec![false; n];
+    let mut floors = vec![0.0; n];
     // A hit pixel whose shadow state differs from a hit neighbour's sits
     // on a shadow edge (neighbours in other tiles are not seen, so an edge
     // running exactly along a tile border is missed).
@@ -281,8 +284,8 @@ pub(crate) fn classify_tile(
         x1: px.w,
         y1: px.h,
     };
-    ctx.block(px, &mut split, whole, 0.0, st);
-    split
+    ctx.block(px, (&mut split, &mut floors), whole, 0.0, st);
+    (split, floors)
 }
 
 /// Per pixel: mean linear colour, covered fraction and nearest hit of the
@@ -346,7 +349,7 @@ impl Ctx<'_, '_> {
     fn block(
         &self,
         px: &mut TilePixels<'_>,
-        split: &mut [bool],
+        (split, floors): (&mut [bool], &mut [f64]),
         b: Rect,
         t_floor: f64,
         st: &mut TileState,
@@ -376,12 +379,13 @@ impl Ctx<'_, '_> {
         if b.is_pixel() {
             let k = idx((b.x0, b.y0));
             split[k] = true;
+            floors[k] = d.t_floor;
             let edge = d.cell == Cell::Smooth && self.shadow_edge[k];
             st.stats.aa_split_by_shading += u64::from(d.by_shading || edge);
             return;
         }
         for q in b.quarters_by_row() {
-            self.block(px, split, q, d.t_floor, st);
+            self.block(px, (&mut *split, &mut *floors), q, d.t_floor, st);
         }
     }
 

@@ -237,6 +237,7 @@ impl<'a> Frame<'a> {
                         w: tw * s,
                         h: th * s,
                         mask: None,
+                        floors: None,
                     };
                     let mut out = render_tile(tr, opts, spec, bg);
                     if s > 1 {
@@ -497,14 +498,16 @@ fn anti_alias(
         samples: &mut t.samples,
         shadowed: &t.shadowed,
     };
-    let split = aa::classify_tile(tr, &mut px, bg, threshold, &mut st);
+    let (split, floors) = aa::classify_tile(tr, &mut px, bg, threshold, &mut st);
     let f = 1u32 << depth;
     let sub = (depth > 0 && split.iter().any(|&s| s)).then(|| {
         let (fw, fh) = (t.w * f, t.h * f);
-        let mask: Vec<bool> = (0..fh)
-            .flat_map(|j| (0..fw).map(move |i| (i, j)))
-            .map(|(i, j)| split[((j / f) * t.w + i / f) as usize])
-            .collect();
+        let pixel = |k: usize| (((k as u32 / fw) / f) * t.w + (k as u32 % fw) / f) as usize;
+        let n = (fw * fh) as usize;
+        let mask: Vec<bool> = (0..n).map(|k| split[pixel(k)]).collect();
+        // Each sub-sample starts where its pixel's area was proven empty
+        // up to: the fine render need not sweep that prefix again.
+        let floors: Vec<f64> = (0..n).map(|k| floors[pixel(k)]).collect();
         let fine_opts = RenderOptions {
             want_depth: false,
             want_normals: false,
@@ -518,6 +521,7 @@ fn anti_alias(
             w: fw,
             h: fh,
             mask: Some(&mask),
+            floors: Some(&floors),
         };
         downsample(render_tile(fine, &fine_opts, spec, bg), f)
     });

@@ -24,6 +24,9 @@ pub(crate) struct TileSpec<'m> {
     pub h: u32,
     /// Row-major: the pixels to trace (None: all of them).
     pub mask: Option<&'m [bool]>,
+    /// Row-major: a ray parameter before which each pixel's ray is known
+    /// to meet no surface (None: its clip start).
+    pub floors: Option<&'m [f64]>,
 }
 
 /// What tracing a tile produces, row-major within the tile.
@@ -141,7 +144,10 @@ fn tile_rays(tr: &Tracer<'_>, spec: &TileSpec<'_>) -> TileRays {
         .enumerate()
         .map(|(k, r)| {
             let on = spec.mask.is_none_or(|m| m[k]);
-            if on { r.slab(&tr.bounds) } else { None }
+            let slab = if on { r.slab(&tr.bounds) } else { None };
+            let floor = spec.floors.map_or(0.0, |f| f[k]);
+            // A floor at or past the clip end leaves nothing to trace.
+            slab.and_then(|(t0, t1)| (floor < t1).then_some((t0.max(floor), t1)))
         })
         .collect();
     TileRays {
