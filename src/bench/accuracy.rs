@@ -151,8 +151,16 @@ pub fn default_variants() -> Vec<Variant> {
     v
 }
 
+/// How far above a grid's RMSE an IAA render may be and still count as
+/// reaching it: IAA's sub-samples sit where the grid's do, so where it
+/// samples it matches the grid, and its RMSE differs from the grid's by
+/// rounding-level amounts (0.005% on orthocircle at 256²) that a strict
+/// comparison would turn into "not reached".
+pub const RMSE_MATCH: f64 = 1.01;
+
 /// IAA against one grid setting on one scene: the fastest IAA render whose
-/// RMSE is at most the grid's, and the ratio of their times.
+/// RMSE is at most the grid's (within [`RMSE_MATCH`]), and the ratio of
+/// their times.
 #[derive(Clone, Debug, PartialEq)]
 pub struct IaaVersusGrid {
     /// Scene name.
@@ -182,7 +190,9 @@ pub fn iaa_versus_grid(rows: &[AccuracyRow]) -> Vec<IaaVersusGrid> {
     for g in rows.iter().filter(|r| r.family == Family::BeamGrid) {
         let iaa = rows
             .iter()
-            .filter(|r| r.scene == g.scene && r.family == Family::BeamIaa && r.rmse <= g.rmse)
+            .filter(|r| {
+                r.scene == g.scene && r.family == Family::BeamIaa && r.rmse <= g.rmse * RMSE_MATCH
+            })
             .min_by(|a, b| a.time_ms.total_cmp(&b.time_ms))
             .map(|r| (r.param.clone(), r.time_ms, r.rmse));
         out.push(IaaVersusGrid {
@@ -476,11 +486,12 @@ mod tests {
             mk(Family::BeamGrid, "grid:4", 100.0, 2e-3),
             mk(Family::BeamGrid, "grid:8", 400.0, 1e-3),
             mk(Family::BeamIaa, "t=1/4", 20.0, 5e-3),
-            mk(Family::BeamIaa, "t=1/16", 60.0, 1.9e-3),
+            mk(Family::BeamIaa, "t=1/16", 60.0, 2.01e-3),
             mk(Family::BeamIaa, "t=1/64", 80.0, 1.5e-3),
         ];
         let c = iaa_versus_grid(&rows);
         assert_eq!(c.len(), 2);
+        // 2.01e-3 is within 1% of grid:4's 2e-3: it counts.
         assert_eq!(c[0].iaa.as_ref().unwrap().0, "t=1/16");
         assert_eq!(c[0].ratio(), Some(0.6));
         assert!(c[1].iaa.is_none() && c[1].ratio().is_none());
