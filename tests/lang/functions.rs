@@ -38,6 +38,12 @@ fn functions_match_rust_at_points() {
         let t = ((v - -1.0) / 2.0f64).clamp(0.0, 1.0);
         assert_close(at("smoothstep(-1, 1, x)", p), t * t * (3.0 - 2.0 * t));
     }
+    assert_err(
+        "object a = smoothstep(1, 1, x) + sphere(1);",
+        "smoothstep's edges are both 1",
+        1,
+        26,
+    );
     // round: halves away from zero.
     assert_eq!(at("round(x)", [2.5, 0.0, 0.0]), 3.0);
     assert_eq!(at("round(x)", [-2.5, 0.0, 0.0]), -3.0);
@@ -132,6 +138,12 @@ fn rotate_about_an_axis_agrees_with_the_axis_rotations() {
     // 120° about (1, 1, 1) cycles the axes: x → y → z → x.
     let f = "rotate(translate(sphere(0.1), 1, 0, 0), 1, 1, 1, 120)";
     assert!((at(f, [0.0, 1.0, 0.0]) - -0.1).abs() < 1e-9);
+    // Huge components are scaled, not overflowed.
+    let big = at(
+        "rotate(translate(sphere(0.1), 1, 0, 0), 0, 0, 1e308, 90)",
+        [0.0, 1.0, 0.0],
+    );
+    assert!((big - -0.1).abs() < 1e-9, "{big}");
     assert_err(
         "object a = rotate(sphere(1), 0, 0, 0, 30);",
         "the rotation axis must be a non-zero vector",

@@ -193,6 +193,13 @@ impl<'a> Lowerer<'_, 'a> {
         env: Env,
     ) -> Result<Val, Diag> {
         let [e0, e1, a] = self.three(args, ctx, env)?;
+        if let (Val::Const(lo), Val::Const(hi)) = (e0, e1)
+            && lo == hi
+        {
+            return Err(ctx
+                .diag(args[1].span, format!("smoothstep's edges are both {lo}"))
+                .with_help("the edges must differ: the step rises from the first to the second"));
+        }
         let n = self.binary(BinaryOp::Sub, a, e0, ctx, span)?;
         let w = self.binary(BinaryOp::Sub, e1, e0, ctx, span)?;
         let q = self.binary(BinaryOp::Div, n, w, ctx, span)?;
@@ -274,8 +281,12 @@ impl<'a> Lowerer<'_, 'a> {
         for (k, a) in axis.iter_mut().enumerate() {
             *a = self.constant_arg(&args[k + 1], ctx, env, "the rotation axis")?;
         }
+        // Scaled by the largest component first, so that huge components
+        // do not overflow the length.
+        let big = axis.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+        let axis = axis.map(|a| a / big);
         let len = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
-        if !(len > 0.0 && len.is_finite()) {
+        if !(big > 0.0 && big.is_finite() && len > 0.0 && len.is_finite()) {
             return Err(ctx
                 .diag(
                     args[1].span,
