@@ -42,7 +42,22 @@ impl<'a> Lowerer<'_, 'a> {
         )?;
         let a = self.lower(&args[0], ctx, env)?;
         let b = self.lower(&args[1], ctx, env)?;
-        // h = max(k - |a - b|, 0) / k;  min(a, b) - h² k/4
+        let c = self.blend_term(a, b, k, ctx, span)?;
+        let mn = self.binary(BinaryOp::Min, a, b, ctx, span)?;
+        self.binary(BinaryOp::Sub, mn, c, ctx, span)
+    }
+
+    /// The polynomial term of the smooth joins, `h²·k/4` with
+    /// `h = max(k - |a - b|, 0) / k`: `blend` subtracts it from the
+    /// minimum, `blend_intersect` adds it to the maximum.
+    fn blend_term(
+        &mut self,
+        a: Val,
+        b: Val,
+        k: f64,
+        ctx: &Ctx<'a>,
+        span: (usize, usize),
+    ) -> Result<Val, Diag> {
         let d = self.binary(BinaryOp::Sub, a, b, ctx, span)?;
         let ad = self.unary(UnaryOp::Abs, d, ctx, span)?;
         let t = self.binary(BinaryOp::Sub, Val::Const(k), ad, ctx, span)?;
@@ -50,8 +65,7 @@ impl<'a> Lowerer<'_, 'a> {
         let h = self.binary(BinaryOp::Div, m, Val::Const(k), ctx, span)?;
         let h2 = self.unary(UnaryOp::Square, h, ctx, span)?;
         let c = self.binary(BinaryOp::Mul, h2, Val::Const(k / 4.0), ctx, span)?;
-        let mn = self.binary(BinaryOp::Min, a, b, ctx, span)?;
-        self.binary(BinaryOp::Sub, mn, c, ctx, span)
+        Ok(c)
     }
 
     /// `translate(s, dx, dy, dz)`.
@@ -145,13 +159,7 @@ impl<'a> Lowerer<'_, 'a> {
         } else {
             b
         };
-        let d = self.binary(BinaryOp::Sub, a, b, ctx, span)?;
-        let ad = self.unary(UnaryOp::Abs, d, ctx, span)?;
-        let t = self.binary(BinaryOp::Sub, Val::Const(k), ad, ctx, span)?;
-        let m = self.binary(BinaryOp::Max, t, Val::Const(0.0), ctx, span)?;
-        let h = self.binary(BinaryOp::Div, m, Val::Const(k), ctx, span)?;
-        let h2 = self.unary(UnaryOp::Square, h, ctx, span)?;
-        let c = self.binary(BinaryOp::Mul, h2, Val::Const(k / 4.0), ctx, span)?;
+        let c = self.blend_term(a, b, k, ctx, span)?;
         let mx = self.binary(BinaryOp::Max, a, b, ctx, span)?;
         self.binary(BinaryOp::Add, mx, c, ctx, span)
     }
