@@ -1,13 +1,15 @@
 //! Evaluators: the interface the tracer calls ([`Evaluator`]), the
 //! reference interpreter ([`interp`]), native code from Cranelift ([`jit`]),
 //! the regional evaluator that answers with a function pruned to a region
-//! ([`regional`]), and building a scene's evaluators ([`build`]).
+//! ([`regional`]), tapes and the evaluator that runs one ([`tape`],
+//! [`taped`]), and building a scene's evaluators ([`build`]).
 
 pub mod build;
 pub mod interp;
 pub mod jit;
 pub mod regional;
 pub mod tape;
+pub mod taped;
 
 pub use crate::ir::semantics::{Grad, IntervalGrad};
 pub use build::{EvalKind, build_evaluator, build_evaluators};

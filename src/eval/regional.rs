@@ -20,8 +20,8 @@
 
 use std::sync::Arc;
 
-use crate::eval::interp::Interpreter;
 use crate::eval::tape::Tape;
+use crate::eval::taped::TapeEvaluator;
 use crate::eval::{Evaluator, Grad, IntervalGrad};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_within, point_box};
@@ -31,8 +31,8 @@ use crate::ir::Function;
 /// `parent` elsewhere.
 pub struct Regional {
     region: IBox,
-    tape: Tape,
-    // What evaluates boxes inside the region: the tape's ops interpreted,
+    tape: Arc<TapeEvaluator>,
+    // What evaluates boxes inside the region: the tape run as it is,
     // or, for a region that did not shrink enough, what answers above it.
     answer: Arc<dyn Evaluator>,
     // Whether `answer` is this region's own tape.
@@ -46,11 +46,12 @@ pub struct Regional {
 impl Regional {
     /// `tape` (exact on `region`) with `parent` answering outside it.
     pub fn new(region: IBox, tape: Tape, parent: Arc<dyn Evaluator>) -> Regional {
+        let tape = Arc::new(TapeEvaluator::new(tape));
         Regional {
             region,
-            answer: Arc::new(Interpreter::shared(tape.shared_function())),
+            answer: Arc::clone(&tape) as Arc<dyn Evaluator>,
             own: true,
-            answer_len: tape.len(),
+            answer_len: tape.tape().len(),
             tape,
             parent,
             children: Vec::new(),
@@ -68,7 +69,7 @@ impl Regional {
     ) -> Regional {
         Regional {
             region,
-            tape,
+            tape: Arc::new(TapeEvaluator::new(tape)),
             answer,
             own: false,
             answer_len,
@@ -108,7 +109,7 @@ impl Regional {
 
     /// The pruned tape.
     pub fn pruned_tape(&self) -> &Tape {
-        &self.tape
+        self.tape.tape()
     }
 
     /// The smallest region of the tree (this one or a sub-region, nested)
@@ -136,14 +137,10 @@ impl Regional {
         }
     }
 
-    /// The region of the tree whose own tape answers for every box in
-    /// `hull`, if one does (a batch inside it runs that tape in one pass).
-    fn own_tape_for(&self, hull: &IBox) -> Option<&Tape> {
-        if !box_within(hull, &self.region) {
-            return None;
-        }
-        let node = self.smallest_holding(hull);
-        node.own.then_some(&node.tape)
+    /// What answers for every box in `hull` at once, if the hull lies in
+    /// the region (a batch inside it then runs in one pass).
+    fn answer_for(&self, hull: &IBox) -> Option<&dyn Evaluator> {
+        box_within(hull, &self.region).then(|| self.smallest_holding(hull).answer.as_ref())
     }
 
     /// The evaluator for a point (see [`Self::for_box`]).
@@ -173,9 +170,9 @@ impl Evaluator for Regional {
         self.for_box(&b).interval_dir(b, v)
     }
 
-    /// One pass over the smallest region's tape when every point lies in
-    /// one region that answers with its own tape; point by point
-    /// otherwise. The same bits either way (pruning is exact).
+    /// One batch on what answers for the smallest region holding every
+    /// point; point by point when the points leave the region. The same
+    /// bits either way (pruning is exact).
     fn point_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
         // A NaN coordinate would vanish from the hull below; such a point
         // goes to the point-by-point path, as `point` sends it to the parent.
@@ -190,10 +187,8 @@ impl Evaluator for Regional {
                 [span(xs), span(ys), span(zs)]
             })
             .filter(|h| h.iter().all(|c| c.lo <= c.hi));
-        match hull.as_ref().and_then(|h| self.own_tape_for(h)) {
-            Some(tape) => {
-                crate::eval::tape::with_workspace(|ws| tape.point_batch([xs, ys, zs], out, ws))
-            }
+        match hull.as_ref().and_then(|h| self.answer_for(h)) {
+            Some(answer) => answer.point_batch(xs, ys, zs, out),
             None => {
                 for (i, o) in out.iter_mut().enumerate() {
                     *o = self.point([xs[i], ys[i], zs[i]]);
@@ -202,8 +197,8 @@ impl Evaluator for Regional {
         }
     }
 
-    /// One pass over the smallest region's tape when every box lies in one
-    /// region that answers with its own tape; box by box otherwise.
+    /// One batch on what answers for the smallest region holding every
+    /// box; box by box when the boxes leave the region.
     fn interval_batch(&self, boxes: &[[Interval; 3]], out: &mut [Interval]) {
         let proper = |b: &IBox| b.iter().all(|c| c.lo <= c.hi);
         let hull = boxes
@@ -216,10 +211,8 @@ impl Evaluator for Regional {
                     .reduce(crate::interval::boxes::box_hull)
             })
             .flatten();
-        match hull.as_ref().and_then(|h| self.own_tape_for(h)) {
-            Some(tape) => {
-                crate::eval::tape::with_workspace(|ws| tape.interval_batch(boxes, out, ws))
-            }
+        match hull.as_ref().and_then(|h| self.answer_for(h)) {
+            Some(answer) => answer.interval_batch(boxes, out),
             None => {
                 for (b, o) in boxes.iter().zip(out.iter_mut()) {
                     *o = self.interval(*b);
@@ -230,11 +223,11 @@ impl Evaluator for Regional {
 
     /// The pruned function (exact on [`Evaluator::valid_region`]).
     fn function(&self) -> Option<&Function> {
-        Some(self.tape.function())
+        Some(self.tape.tape().function())
     }
 
     fn tape(&self) -> Option<&Tape> {
-        Some(&self.tape)
+        Some(self.tape.tape())
     }
 
     fn valid_region(&self) -> Option<IBox> {
@@ -257,6 +250,7 @@ impl Evaluator for Regional {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::eval::interp::Interpreter;
     use crate::ir::random::{Rng, random_function};
 
     fn same(a: f64, b: f64) -> bool {

@@ -165,6 +165,65 @@ impl Tape {
         self.code.last().map_or(0, |i| i.out() as usize)
     }
 
+    /// f at `p`, the same bits as the reference interpreter: one pass over
+    /// the registers, with the common ops written inline (the reference
+    /// rules' `match` per op, a call each, costs more than the op).
+    pub fn point(&self, p: [f64; 3], ws: &mut Workspace) -> f64 {
+        let m = &mut ws.points;
+        m.clear();
+        m.resize(self.registers, 0.0);
+        for instr in &self.code {
+            let (o, v) = match *instr {
+                Instr::Var(o, v) => (o, p[v.index()]),
+                Instr::Const(o, c) => (o, c),
+                Instr::Unary(o, op, a) => {
+                    let a = m[a as usize];
+                    let v = match op {
+                        UnaryOp::Neg => -a,
+                        UnaryOp::Square => a * a,
+                        UnaryOp::Sqrt => a.sqrt(),
+                        _ => point_unary(op, a),
+                    };
+                    (o, v)
+                }
+                Instr::Binary(o, op, a, b) => {
+                    let (a, b) = (m[a as usize], m[b as usize]);
+                    let v = match op {
+                        BinaryOp::Add => a + b,
+                        BinaryOp::Sub => a - b,
+                        BinaryOp::Mul => a * b,
+                        _ => point_binary(op, a, b),
+                    };
+                    (o, v)
+                }
+                Instr::Powi(o, a, k) => (o, point_powi(m[a as usize], k)),
+            };
+            m[o as usize] = v;
+        }
+        m[self.root_reg()]
+    }
+
+    /// An interval containing f over `b`, the same bits as the reference
+    /// interpreter's (see [`Tape::point`]).
+    pub fn interval(&self, b: [Interval; 3], ws: &mut Workspace) -> Interval {
+        let m = &mut ws.intervals;
+        m.clear();
+        m.resize(self.registers, Interval::point(0.0));
+        for instr in &self.code {
+            let (o, v) = match *instr {
+                Instr::Var(o, v) => (o, b[v.index()]),
+                Instr::Const(o, c) => (o, Interval::point(c)),
+                Instr::Unary(o, op, a) => (o, interval_unary_inline(op, m[a as usize])),
+                Instr::Binary(o, op, a, b) => {
+                    (o, interval_binary_inline(op, m[a as usize], m[b as usize]))
+                }
+                Instr::Powi(o, a, k) => (o, m[a as usize].powi(k)),
+            };
+            m[o as usize] = v;
+        }
+        m[self.root_reg()]
+    }
+
     /// `out[i] = f(xs[i], ys[i], zs[i])`, the same bits as the reference
     /// interpreter.
     pub fn point_batch(&self, [xs, ys, zs]: [&[f64]; 3], out: &mut [f64], ws: &mut Workspace) {
@@ -224,15 +283,11 @@ impl Tape {
                 Instr::Const(o, c) => m[col(o)..col(o) + n].fill(Interval::point(c)),
                 Instr::Unary(o, op, a) => {
                     let (o, a) = (col(o), col(a));
-                    for i in 0..n {
-                        m[o + i] = interval_unary(op, m[a + i]);
-                    }
+                    interval_unary_column(m, op, n, [o, a]);
                 }
                 Instr::Binary(o, op, a, b) => {
                     let (o, a, b) = (col(o), col(a), col(b));
-                    for i in 0..n {
-                        m[o + i] = interval_binary(op, m[a + i], m[b + i]);
-                    }
+                    interval_binary_column(m, op, n, [o, a, b]);
                 }
                 Instr::Powi(o, a, k) => {
                     let (o, a) = (col(o), col(a));
@@ -286,7 +341,7 @@ impl Tape {
                 Instr::Const(o, c) => (o, Interval::point(c), const_facts(c)),
                 Instr::Unary(o, u, a) => {
                     let a = at(a);
-                    let v = interval_unary(u, a.0);
+                    let v = interval_unary_inline(u, a.0);
                     (o, v, unary_facts(u, a, v))
                 }
                 Instr::Binary(o, op, x, y) => {
@@ -297,7 +352,7 @@ impl Tape {
                         alias[k] = alias[[xa, ya][w].index()];
                         decided += 1;
                     }
-                    let v = interval_binary(op, x.0, y.0);
+                    let v = interval_binary_inline(op, x.0, y.0);
                     (o, v, binary_facts(op, x, y, v))
                 }
                 Instr::Powi(o, a, p) => {
@@ -325,19 +380,32 @@ impl Tape {
 
     /// The one backward pass that writes a tape: the ops of `parent` marked
     /// `live` (see [`liveness`]), each operand read through `alias`, with
-    /// registers assigned as it goes.
+    /// registers assigned as it goes. Each op is written straight into its
+    /// final slot: a forward count over `live` gives every kept op its
+    /// index in the child first.
     fn write_child(
         parent: &Function,
         alias: &[usize],
         live: &[bool],
         scratch: &mut ChildScratch,
     ) -> Tape {
+        const NONE: Reg = Reg::MAX;
         let n = parent.ops.len();
+        let index = &mut scratch.index;
+        index.clear();
+        index.reserve(n);
+        let mut kept = 0u32;
+        for &l in live {
+            index.push(ValueId(kept));
+            kept += u32::from(l);
+        }
+        let kept = kept as usize;
         let root = alias[parent.root.index()];
         let reg = &mut scratch.reg;
         reg.clear();
-        reg.resize(n, None);
-        let mut free: Vec<Reg> = Vec::new();
+        reg.resize(n, NONE);
+        let free = &mut scratch.free;
+        free.clear();
         let mut registers: Reg = 0;
         let mut take = |free: &mut Vec<Reg>| {
             free.pop().unwrap_or_else(|| {
@@ -345,47 +413,53 @@ impl Tape {
                 registers - 1
             })
         };
-        reg[root] = Some(take(&mut free));
-        // Written back to front: (parent index, op over parent indices,
-        // instruction).
-        let mut rev: Vec<(usize, Op, Instr)> = Vec::new();
+        reg[root] = take(free);
+        let mut ops = vec![Op::Const(0.0); kept];
+        let mut code = vec![Instr::Const(0, 0.0); kept];
         for k in (0..n).rev() {
             if !live[k] {
                 continue;
             }
-            let op = parent.ops[k].map_operands(|a| ValueId(alias[a.index()] as u32));
-            let out = reg[k].expect("a live value has its register from its last use");
+            let out = reg[k];
+            debug_assert!(
+                out != NONE,
+                "a live value has its register from its last use"
+            );
             // Before its definition the value is not alive.
             free.push(out);
-            for a in op.operands() {
-                let a = a.index();
-                if reg[a].is_none() {
-                    reg[a] = Some(take(&mut free));
+            let mut operand = |a: ValueId| {
+                let a = alias[a.index()];
+                if reg[a] == NONE {
+                    reg[a] = take(free);
                 }
-            }
-            let r = |a: ValueId| reg[a.index()].expect("operand register taken above");
-            let instr = match op {
-                Op::Var(v) => Instr::Var(out, v),
-                Op::Const(c) => Instr::Const(out, c),
-                Op::Unary(u, a) => Instr::Unary(out, u, r(a)),
-                Op::Binary(o, a, b) => Instr::Binary(out, o, r(a), r(b)),
-                Op::Powi(a, p) => Instr::Powi(out, r(a), p),
+                (index[a], reg[a])
             };
-            rev.push((k, op, instr));
+            let (op, instr) = match parent.ops[k] {
+                Op::Var(v) => (Op::Var(v), Instr::Var(out, v)),
+                Op::Const(c) => (Op::Const(c), Instr::Const(out, c)),
+                Op::Unary(u, a) => {
+                    let (ia, ra) = operand(a);
+                    (Op::Unary(u, ia), Instr::Unary(out, u, ra))
+                }
+                Op::Binary(o, a, b) => {
+                    let (ia, ra) = operand(a);
+                    let (ib, rb) = operand(b);
+                    (Op::Binary(o, ia, ib), Instr::Binary(out, o, ra, rb))
+                }
+                Op::Powi(a, p) => {
+                    let (ia, ra) = operand(a);
+                    (Op::Powi(ia, p), Instr::Powi(out, ra, p))
+                }
+            };
+            let at = index[k].index();
+            ops[at] = op;
+            code[at] = instr;
         }
-        let index = &mut scratch.index;
-        index.clear();
-        index.resize(n, ValueId(0));
-        let mut ops = Vec::with_capacity(rev.len());
-        let mut code = Vec::with_capacity(rev.len());
-        for (k, op, instr) in rev.into_iter().rev() {
-            index[k] = ValueId(ops.len() as u32);
-            ops.push(op.map_operands(|a| index[a.index()]));
-            code.push(instr);
-        }
-        let root = index[root];
         Tape {
-            ssa: Arc::new(Function { ops, root }),
+            ssa: Arc::new(Function {
+                ops,
+                root: index[root],
+            }),
             code,
             registers: registers as usize,
         }
@@ -414,8 +488,9 @@ fn liveness(f: &Function, alias: &[usize], live: &mut Vec<bool>) -> usize {
 /// Per-op scratch of writing a child tape.
 #[derive(Clone, Default, Debug)]
 pub struct ChildScratch {
-    reg: Vec<Option<Reg>>,
+    reg: Vec<Reg>,
     index: Vec<ValueId>,
+    free: Vec<Reg>,
 }
 
 /// The ops the root of `f` reads, in depth-first post-order (operands
@@ -454,6 +529,53 @@ fn point_binary_column(m: &mut [f64], op: BinaryOp, n: usize, [o, a, b]: [usize;
         BinaryOp::Sub => (0..n).for_each(|i| m[o + i] = m[a + i] - m[b + i]),
         BinaryOp::Mul => (0..n).for_each(|i| m[o + i] = m[a + i] * m[b + i]),
         _ => (0..n).for_each(|i| m[o + i] = point_binary(op, m[a + i], m[b + i])),
+    }
+}
+
+/// [`interval_unary`] with the ops of distance fields and CSG inline.
+#[inline(always)]
+fn interval_unary_inline(op: UnaryOp, a: Interval) -> Interval {
+    match op {
+        UnaryOp::Neg => a.neg(),
+        UnaryOp::Square => a.square(),
+        UnaryOp::Sqrt => a.sqrt(),
+        UnaryOp::Abs => a.abs(),
+        _ => interval_unary(op, a),
+    }
+}
+
+/// [`interval_binary`] with the ops of distance fields and CSG inline.
+#[inline(always)]
+fn interval_binary_inline(op: BinaryOp, a: Interval, b: Interval) -> Interval {
+    match op {
+        BinaryOp::Add => a.add(b),
+        BinaryOp::Sub => a.sub(b),
+        BinaryOp::Mul => a.mul(b),
+        BinaryOp::Min => a.min(b),
+        BinaryOp::Max => a.max(b),
+        _ => interval_binary(op, a, b),
+    }
+}
+
+/// One unary op over a column of intervals, one loop per common op.
+fn interval_unary_column(m: &mut [Interval], op: UnaryOp, n: usize, [o, a]: [usize; 2]) {
+    match op {
+        UnaryOp::Neg => (0..n).for_each(|i| m[o + i] = m[a + i].neg()),
+        UnaryOp::Square => (0..n).for_each(|i| m[o + i] = m[a + i].square()),
+        UnaryOp::Sqrt => (0..n).for_each(|i| m[o + i] = m[a + i].sqrt()),
+        _ => (0..n).for_each(|i| m[o + i] = interval_unary(op, m[a + i])),
+    }
+}
+
+/// One binary op over a column of intervals, one loop per common op.
+fn interval_binary_column(m: &mut [Interval], op: BinaryOp, n: usize, [o, a, b]: [usize; 3]) {
+    match op {
+        BinaryOp::Add => (0..n).for_each(|i| m[o + i] = m[a + i].add(m[b + i])),
+        BinaryOp::Sub => (0..n).for_each(|i| m[o + i] = m[a + i].sub(m[b + i])),
+        BinaryOp::Mul => (0..n).for_each(|i| m[o + i] = m[a + i].mul(m[b + i])),
+        BinaryOp::Min => (0..n).for_each(|i| m[o + i] = m[a + i].min(m[b + i])),
+        BinaryOp::Max => (0..n).for_each(|i| m[o + i] = m[a + i].max(m[b + i])),
+        _ => (0..n).for_each(|i| m[o + i] = interval_binary(op, m[a + i], m[b + i])),
     }
 }
 

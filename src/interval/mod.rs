@@ -240,6 +240,7 @@ impl Interval {
     }
 
     /// `-self` (exact).
+    #[inline]
     pub fn neg(self) -> Interval {
         Interval::new(-self.hi, -self.lo)
     }
@@ -358,18 +359,21 @@ impl Interval {
 
     /// `|self|` (exact): lanes `(min(-lo, hi, 0), max(-lo, hi))`, i.e.
     /// `[max(lo, -hi, 0), max(-lo, hi)]`. An EMPTY operand keeps a NaN lane.
+    #[inline]
     pub fn abs(self) -> Interval {
         let (n, h) = self.lanes();
         Interval::from_lanes(mn(0.0, mn(n, h)), mx(h, n))
     }
 
     /// `self²`, never negative (tighter than `self * self` when 0 ∈ self).
+    #[inline]
     pub fn square(self) -> Interval {
         let (n, h) = self.abs().lanes();
         Interval::from_lanes(mn(0.0, up(n * n.abs())), up(h * h.abs()))
     }
 
     /// `sqrt(self)` over the non-negative part; EMPTY if self < 0.
+    #[inline]
     pub fn sqrt(self) -> Interval {
         let n = mn(0.0, up(-mx(0.0, self.lo).sqrt()));
         let h = up(self.hi.sqrt());
@@ -380,12 +384,14 @@ impl Interval {
     }
 
     /// `min(self, o)` (exact; a bound is NaN where either operand's is).
+    #[inline]
     pub fn min(self, o: Interval) -> Interval {
         let ((an, ah), (bn, bh)) = (self.lanes(), o.lanes());
         Interval::from_lanes(nan_if(an, bn, mx(an, bn)), nan_if(ah, bh, mn(ah, bh)))
     }
 
     /// `max(self, o)` (exact; a bound is NaN where either operand's is).
+    #[inline]
     pub fn max(self, o: Interval) -> Interval {
         let ((an, ah), (bn, bh)) = (self.lanes(), o.lanes());
         Interval::from_lanes(nan_if(an, bn, mn(an, bn)), nan_if(ah, bh, mx(ah, bh)))

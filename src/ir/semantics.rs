@@ -126,6 +126,7 @@ pub fn point_powi(a: f64, n: i32) -> f64 {
 }
 
 /// Interval semantics of a one-operand op.
+#[inline]
 pub fn interval_unary(op: UnaryOp, a: Interval) -> Interval {
     match op {
         UnaryOp::Neg => a.neg(),
@@ -151,6 +152,7 @@ pub fn interval_unary(op: UnaryOp, a: Interval) -> Interval {
 }
 
 /// Interval semantics of a two-operand op.
+#[inline]
 pub fn interval_binary(op: BinaryOp, a: Interval, b: Interval) -> Interval {
     match op {
         BinaryOp::Add => a.add(b),

@@ -1,0 +1,82 @@
+//! An evaluator that runs a [`Tape`]: values and intervals in one pass
+//! over its registers, batches column by column, derivatives by the
+//! reference rules over the tape's ops.
+//!
+//! Pruned tapes answer most evaluations of a render (see
+//! [`crate::eval::regional`]); interpreting them through the tape instead
+//! of the SSA function spends one slot per register rather than one per op,
+//! and lets a batch of points or boxes run each op over the whole batch.
+//! Every answer is the reference interpreter's bits (both call the rules
+//! of [`crate::ir::semantics`]); the conformance suite checks it.
+
+use std::sync::Arc;
+
+use crate::eval::interp::Interpreter;
+use crate::eval::tape::{Tape, with_workspace};
+use crate::eval::{Evaluator, Grad, IntervalGrad};
+use crate::interval::Interval;
+use crate::ir::Function;
+
+/// A [`Tape`] as an [`Evaluator`].
+pub struct TapeEvaluator {
+    tape: Tape,
+    // The reference rules over the tape's ops, for the derivative kinds.
+    derivatives: Interpreter,
+}
+
+impl TapeEvaluator {
+    /// An evaluator running `tape`.
+    pub fn new(tape: Tape) -> TapeEvaluator {
+        let derivatives = Interpreter::shared(tape.shared_function());
+        TapeEvaluator { tape, derivatives }
+    }
+
+    /// An evaluator running the tape of `f`.
+    pub fn of_function(f: &Function) -> TapeEvaluator {
+        TapeEvaluator::new(Tape::new(f))
+    }
+
+    /// The tape it runs.
+    pub fn tape(&self) -> &Tape {
+        &self.tape
+    }
+}
+
+impl Evaluator for TapeEvaluator {
+    fn point(&self, p: [f64; 3]) -> f64 {
+        with_workspace(|ws| self.tape.point(p, ws))
+    }
+
+    fn point_grad(&self, p: [f64; 3]) -> Grad {
+        self.derivatives.point_grad(p)
+    }
+
+    fn interval(&self, b: [Interval; 3]) -> Interval {
+        with_workspace(|ws| self.tape.interval(b, ws))
+    }
+
+    fn interval_grad(&self, b: [Interval; 3]) -> IntervalGrad {
+        self.derivatives.interval_grad(b)
+    }
+
+    fn interval_dir(&self, b: [Interval; 3], v: [Interval; 3]) -> [Interval; 2] {
+        self.derivatives.interval_dir(b, v)
+    }
+
+    fn function(&self) -> Option<&Function> {
+        Some(self.tape.function())
+    }
+
+    fn point_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
+        with_workspace(|ws| self.tape.point_batch([xs, ys, zs], out, ws))
+    }
+
+    fn interval_batch(&self, boxes: &[[Interval; 3]], out: &mut [Interval]) {
+        with_workspace(|ws| self.tape.interval_batch(boxes, out, ws))
+    }
+}
+
+/// [`TapeEvaluator::new`], shared.
+pub fn shared(tape: Tape) -> Arc<TapeEvaluator> {
+    Arc::new(TapeEvaluator::new(tape))
+}
