@@ -259,6 +259,7 @@ fn flat_leaf(tr: &Tracer<'_>, tile: &mut TileRays, b: Rect, live: &[u32], st: &m
                 t: t0,
                 obj: best[i].1,
                 inside: true,
+                grad: None,
             });
         } else {
             rest.push(i);
@@ -422,6 +423,7 @@ fn all_start_inside(
             t,
             obj,
             inside: true,
+            grad: None,
         });
     }
     true

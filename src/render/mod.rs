@@ -220,6 +220,11 @@ pub struct Hit {
     pub obj: usize,
     /// The ray started inside a solid (hit at its clip start).
     pub inside: bool,
+    /// f's gradient at the hit, where the evaluator that refined the root
+    /// took it: pruned around the root, it is the shortest tape at hand
+    /// (pruning is exact, so the bits are those of any other evaluator).
+    /// None where shading takes it.
+    pub grad: Option<[f64; 3]>,
 }
 
 /// How a pixel was decided.

@@ -71,6 +71,7 @@ pub(crate) fn starts_inside(
         t: t0,
         obj,
         inside: true,
+        grad: None,
     })
 }
 
@@ -104,12 +105,13 @@ const RAY_PRUNE_RATIO: f64 = 4.0;
 // (nearest last). `steps` counts pieces across nested calls; `scope` is
 // the width of the piece `tr`'s functions were last pruned to (infinite
 // at first). Where pruning is on, a piece `RAY_PRUNE_RATIO` times
-// narrower than `scope` is swept, with its sub-pieces, by a nested call
-// with the functions pruned to it (when that shrinks them): a ray's pieces soon shrink to a few pixels across, over which a
-// union of many objects keeps one or two, while the tile's slices keep
-// every object that meets them. Pruning is exact, so the nesting changes
-// the cost of the evaluations and the tightness of their intervals, not
-// the order in which pieces are visited.
+// narrower than `scope` that its interval does not reject is swept again,
+// with its sub-pieces, by a nested call with the functions pruned to it
+// (when that shrinks them): a ray's pieces soon shrink to a few pixels
+// across, over which a union of many objects keeps one or two, while the
+// tile's slices keep every object that meets them. Pruning is exact, so
+// the nesting changes the cost of the evaluations and the tightness of
+// their intervals, not the order in which pieces are visited.
 fn sweep_ray(
     tr: &Tracer<'_>,
     ray: &PixelRay,
@@ -120,6 +122,21 @@ fn sweep_ray(
 ) -> Option<Hit> {
     let mut cand: Vec<(u32, Interval)> = Vec::with_capacity(live.len());
     while let Some((a, b)) = stack.pop() {
+        *steps += 1;
+        let bx = ray_box(ray.o, ray.d, Interval::new(a, b));
+        cand.clear();
+        for &k in live {
+            let f = tr.interval(k as usize, bx, &mut st.stats);
+            if !f.is_empty() && f.lo <= 0.0 {
+                cand.push((k, f));
+            }
+        }
+        if cand.is_empty() {
+            continue;
+        }
+        // Only a piece that may hold surface is pruned to: most pieces are
+        // rejected by their first evaluation, which costs a third of a
+        // pruning pass over the same tape.
         if tr.prune
             && (b - a) * RAY_PRUNE_RATIO <= scope
             && let Some((evals, live_ops)) = tr.pruned_to_ray(ray, Interval::new(a, b), st)
@@ -131,18 +148,7 @@ fn sweep_ray(
             }
             continue;
         }
-        *steps += 1;
-        let bx = ray_box(ray.o, ray.d, Interval::new(a, b));
-        cand.clear();
-        for &k in live {
-            let f = tr.interval(k as usize, bx, &mut st.stats);
-            if !f.is_empty()
-                && f.lo <= 0.0
-                && !centred_positive(tr, ray, k as usize, bx, a, b, &mut st.stats)
-            {
-                cand.push((k, f));
-            }
-        }
+        cand.retain(|&(k, _)| !centred_positive(tr, ray, k as usize, bx, a, b, &mut st.stats));
         if cand.is_empty() {
             continue;
         }
@@ -235,6 +241,7 @@ fn narrow_hit(
         t: a,
         obj,
         inside: false,
+        grad: None,
     }
 }
 
@@ -326,6 +333,7 @@ pub(crate) fn march(
                 t,
                 obj,
                 inside: false,
+                grad: None,
             }));
         }
         prev_t = t;
@@ -457,7 +465,8 @@ mod tests {
             Some(Hit {
                 t: 0.0,
                 obj: 0,
-                inside: true
+                inside: true,
+                grad: None,
             })
         );
     }

@@ -149,11 +149,13 @@ pub(crate) fn refine(
         tol,
     );
     st.point_evals += evals;
-    let obj = scene_point(tr, live, ray.at(t), st).1;
+    let p = ray.at(t);
+    let obj = scene_point(tr, live, p, st).1;
     Some(Hit {
         t,
         obj,
         inside: false,
+        grad: Some(tr.point_grad(obj, p, st).d),
     })
 }
 
@@ -225,11 +227,14 @@ pub(crate) fn refine_batch(
         .map(|((i, _, _), &t)| brackets[*i].ray.at(t))
         .collect();
     let objects = batch.min_and_object(tr, live, &at_root, st);
-    for (((i, _, _), &t), &(_, obj)) in searches.iter().zip(&roots).zip(&objects) {
+    for ((((i, _, _), &t), &(_, obj)), &p) in
+        searches.iter().zip(&roots).zip(&objects).zip(&at_root)
+    {
         out[*i] = Some(Hit {
             t,
             obj,
             inside: false,
+            grad: Some(tr.point_grad(obj, p, st).d),
         });
     }
     out

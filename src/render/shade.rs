@@ -238,8 +238,10 @@ pub(crate) fn surface(
             grad_len: f64::NAN,
         };
     }
-    let g = tr.point_grad(hit.obj, p.to_array(), st);
-    let nout = normalize(DVec3::from_array(g.d)).unwrap_or(v);
+    let d = hit
+        .grad
+        .unwrap_or_else(|| tr.point_grad(hit.obj, p.to_array(), st).d);
+    let nout = normalize(DVec3::from_array(d)).unwrap_or(v);
     let n = if nout.dot(v) < 0.0 { -nout } else { nout };
     Surf {
         p,
@@ -248,7 +250,7 @@ pub(crate) fn surface(
         v,
         min_w: 0.5 * eps,
         color,
-        grad_len: DVec3::from_array(g.d).length(),
+        grad_len: DVec3::from_array(d).length(),
     }
 }
 
