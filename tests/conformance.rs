@@ -1,6 +1,6 @@
 //! The evaluator conformance suite (tests/common/suite.rs) run on every
-//! evaluator: the reference interpreter, the JIT, and the regional
-//! evaluator (a function pruned to a region, the whole function
+//! evaluator: the reference interpreter, a tape run over its registers
+//! (`eval::taped`), the JIT, and the regional evaluator (a function pruned to a region, the whole function
 //! interpreted outside it).
 
 #[macro_use]
@@ -24,6 +24,16 @@ mod interp {
 
     conformance_suite!(
         |f: &Function| -> Arc<dyn Evaluator> { Arc::new(Interpreter::new(f.clone())) },
+        exact_intervals: true
+    );
+}
+
+mod taped {
+    use super::*;
+    use ibeam::eval::taped::TapeEvaluator;
+
+    conformance_suite!(
+        |f: &Function| -> Arc<dyn Evaluator> { Arc::new(TapeEvaluator::of_function(f)) },
         exact_intervals: true
     );
 }

@@ -197,6 +197,81 @@ fn pick_operand(
     }
 }
 
+/// An interval value and `S` of its partials (one for a directional
+/// derivative, three for the gradient).
+pub(crate) type IntervalDual<const S: usize> = (Interval, [Interval; S]);
+
+/// The first `S` partials as the shared rules' operand (the rest absent).
+fn partials<const S: usize>(x: [Interval; S]) -> [Option<Interval>; 3] {
+    std::array::from_fn(|k| (k < S).then(|| x[k]))
+}
+
+/// The first `S` of the shared rules' partials (absent ones are 0).
+fn first<const S: usize>(d: [Option<Interval>; 3]) -> [Interval; S] {
+    std::array::from_fn(|k| d[k].unwrap_or(Interval::point(0.0)))
+}
+
+/// `op(a)` and `S` partials by the reference rules: the bits of the
+/// interpreter's [`Evaluator::interval_dir`] (S = 1) and
+/// [`Evaluator::interval_grad`] (S = 3), as each partial is computed from
+/// the same partial of the operands alone. The ops of distance fields are
+/// written out with the rules' own arithmetic; the rest go through the
+/// shared rules.
+#[inline]
+pub(crate) fn dual_unary<const S: usize>(op: UnaryOp, (a, x): IntervalDual<S>) -> IntervalDual<S> {
+    match op {
+        UnaryOp::Neg => (a.neg(), x.map(Interval::neg)),
+        UnaryOp::Square => {
+            let fp = a.add(a);
+            (a.square(), x.map(|x| fp.mul(x)))
+        }
+        UnaryOp::Sqrt => {
+            let v = a.sqrt();
+            let fp = Interval::point(0.5).div(v);
+            (v, x.map(|x| fp.mul(x)))
+        }
+        _ => {
+            let (v, d) = grad_unary(&mut Reference, op, (a, partials(x)));
+            (v, first(d))
+        }
+    }
+}
+
+/// `op(a, b)` and `S` partials (see [`dual_unary`]).
+#[inline]
+pub(crate) fn dual_binary<const S: usize>(
+    op: BinaryOp,
+    (a, x): IntervalDual<S>,
+    (b, y): IntervalDual<S>,
+) -> IntervalDual<S> {
+    let zip = |f: &dyn Fn(Interval, Interval) -> Interval| -> [Interval; S] {
+        std::array::from_fn(|k| f(x[k], y[k]))
+    };
+    match op {
+        BinaryOp::Add => (a.add(b), zip(&|x, y| x.add(y))),
+        BinaryOp::Sub => (a.sub(b), zip(&|x, y| x.sub(y))),
+        BinaryOp::Mul => (a.mul(b), zip(&|x, y| b.mul(x).add(a.mul(y)))),
+        BinaryOp::Min => {
+            let (l, r) = (a.hi < b.lo, b.hi <= a.lo);
+            (a.min(b), zip(&|x, y| pick_operand(a, b, l, r, x, y)))
+        }
+        BinaryOp::Max => {
+            let (l, r) = (a.lo > b.hi, b.lo >= a.hi);
+            (a.max(b), zip(&|x, y| pick_operand(a, b, l, r, x, y)))
+        }
+        _ => {
+            let (v, d) = grad_binary(&mut Reference, op, (a, partials(x)), (b, partials(y)));
+            (v, first(d))
+        }
+    }
+}
+
+/// `a^n` and `S` partials (see [`dual_unary`]).
+pub(crate) fn dual_powi<const S: usize>((a, x): IntervalDual<S>, n: i32) -> IntervalDual<S> {
+    let (v, d) = grad_powi(&mut Reference, (a, partials(x)), i64::from(n));
+    (v, first(d))
+}
+
 /// The reference evaluator: walks the op list once per evaluation.
 #[derive(Clone, Debug)]
 pub struct Interpreter {

@@ -28,6 +28,8 @@
 
 use std::sync::Arc;
 
+use crate::eval::IntervalGrad;
+use crate::eval::interp::{IntervalDual, dual_binary, dual_powi, dual_unary};
 use crate::interval::Interval;
 use crate::ir::prune::{
     Facts, binary_facts, const_facts, decided_operand, powi_facts, unary_facts, var_facts,
@@ -82,6 +84,8 @@ pub struct Tape {
 pub struct Workspace {
     points: Vec<f64>,
     intervals: Vec<Interval>,
+    dir: Vec<IntervalDual<1>>,
+    grad: Vec<IntervalDual<3>>,
     // Scratch of `Tape::prune`: facts per register, aliases and liveness
     // per op.
     facts: Vec<Facts>,
@@ -220,6 +224,51 @@ impl Tape {
                 Instr::Powi(o, a, k) => (o, m[a as usize].powi(k)),
             };
             m[o as usize] = v;
+        }
+        m[self.root_reg()]
+    }
+
+    /// F over `b` and its derivative along every direction in `v`, the
+    /// same bits as the reference interpreter's
+    /// [`crate::eval::Evaluator::interval_dir`].
+    pub fn interval_dir(
+        &self,
+        b: [Interval; 3],
+        v: [Interval; 3],
+        ws: &mut Workspace,
+    ) -> [Interval; 2] {
+        let (f, [d]) = self.duals(b, v.map(|vk| [vk]), &mut ws.dir);
+        [f, d]
+    }
+
+    /// F over `b` and its three partials, the same bits as the reference
+    /// interpreter's [`crate::eval::Evaluator::interval_grad`].
+    pub fn interval_grad(&self, b: [Interval; 3], ws: &mut Workspace) -> IntervalGrad {
+        let (o, z) = (Interval::point(1.0), Interval::point(0.0));
+        let (v, d) = self.duals(b, [[o, z, z], [z, o, z], [z, z, o]], &mut ws.grad);
+        IntervalGrad { v, d }
+    }
+
+    // Forward mode over the registers: each value with `S` partials, those
+    // of coordinate k starting as `seed[k]`.
+    fn duals<const S: usize>(
+        &self,
+        b: [Interval; 3],
+        seed: [[Interval; S]; 3],
+        m: &mut Vec<IntervalDual<S>>,
+    ) -> IntervalDual<S> {
+        let zero = Interval::point(0.0);
+        m.clear();
+        m.resize(self.registers, (zero, [zero; S]));
+        for instr in &self.code {
+            let (o, d) = match *instr {
+                Instr::Var(o, var) => (o, (b[var.index()], seed[var.index()])),
+                Instr::Const(o, c) => (o, (Interval::point(c), [zero; S])),
+                Instr::Unary(o, op, a) => (o, dual_unary(op, m[a as usize])),
+                Instr::Binary(o, op, a, c) => (o, dual_binary(op, m[a as usize], m[c as usize])),
+                Instr::Powi(o, a, k) => (o, dual_powi(m[a as usize], k)),
+            };
+            m[o as usize] = d;
         }
         m[self.root_reg()]
     }
@@ -625,6 +674,36 @@ mod tests {
             tape.interval_batch(&boxes, &mut iv, &mut ws);
             for (b, v) in boxes.iter().zip(&iv) {
                 assert!(same_iv(*v, it.interval(*b)), "seed {seed} over {b:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn scalar_runs_and_directions_give_the_interpreters_bits() {
+        let mut rng = Rng::new(17);
+        let mut ws = Workspace::default();
+        for seed in 0..300 {
+            let f = random_function(seed, 10);
+            let tape = Tape::new(&f);
+            let it = Interpreter::new(f);
+            for _ in 0..8 {
+                let p: [f64; 3] = std::array::from_fn(|_| rng.range(-3.0, 3.0));
+                assert!(
+                    same(tape.point(p, &mut ws), it.point(p)),
+                    "seed {seed} at {p:?}"
+                );
+                let b = random_box(&mut rng, 3.0);
+                assert!(
+                    same_iv(tape.interval(b, &mut ws), it.interval(b)),
+                    "seed {seed} over {b:?}"
+                );
+                let v = random_box(&mut rng, 2.0);
+                let [tv, td] = tape.interval_dir(b, v, &mut ws);
+                let [iv, id] = it.interval_dir(b, v);
+                assert!(
+                    same_iv(tv, iv) && same_iv(td, id),
+                    "seed {seed} over {b:?} along {v:?}"
+                );
             }
         }
     }

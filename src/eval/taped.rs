@@ -17,6 +17,10 @@ use crate::eval::{Evaluator, Grad, IntervalGrad};
 use crate::interval::Interval;
 use crate::ir::Function;
 
+/// Batches run this many inputs per pass, so that the registers' columns
+/// (registers × inputs values) stay in cache whatever the caller's batch.
+const CHUNK: usize = 256;
+
 /// A [`Tape`] as an [`Evaluator`].
 pub struct TapeEvaluator {
     tape: Tape,
@@ -56,11 +60,11 @@ impl Evaluator for TapeEvaluator {
     }
 
     fn interval_grad(&self, b: [Interval; 3]) -> IntervalGrad {
-        self.derivatives.interval_grad(b)
+        with_workspace(|ws| self.tape.interval_grad(b, ws))
     }
 
     fn interval_dir(&self, b: [Interval; 3], v: [Interval; 3]) -> [Interval; 2] {
-        self.derivatives.interval_dir(b, v)
+        with_workspace(|ws| self.tape.interval_dir(b, v, ws))
     }
 
     fn function(&self) -> Option<&Function> {
@@ -68,11 +72,21 @@ impl Evaluator for TapeEvaluator {
     }
 
     fn point_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
-        with_workspace(|ws| self.tape.point_batch([xs, ys, zs], out, ws))
+        with_workspace(|ws| {
+            for (i, out) in out.chunks_mut(CHUNK).enumerate() {
+                let r = i * CHUNK..i * CHUNK + out.len();
+                let cols = [&xs[r.clone()], &ys[r.clone()], &zs[r]];
+                self.tape.point_batch(cols, out, ws);
+            }
+        })
     }
 
     fn interval_batch(&self, boxes: &[[Interval; 3]], out: &mut [Interval]) {
-        with_workspace(|ws| self.tape.interval_batch(boxes, out, ws))
+        with_workspace(|ws| {
+            for (b, out) in boxes.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {
+                self.tape.interval_batch(b, out, ws);
+            }
+        })
     }
 }
 

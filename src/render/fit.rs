@@ -16,7 +16,7 @@ use glam::DVec3;
 
 use super::camera::normalize;
 use crate::eval::Evaluator;
-use crate::eval::interp::Interpreter;
+use crate::eval::taped::TapeEvaluator;
 use crate::interval::Interval;
 use crate::scene::{Bounds, Camera, Projection, Scene};
 
@@ -55,14 +55,15 @@ fn solid_box_within(
             *s |= u;
         }
     }
-    // The interpreter answers without compiling: a large function's
+    // The function's tape answers without compiling: a large function's
     // native interval code would cost more to compile than the few
     // thousand cells cost to interpret (the render itself runs pruned
-    // tapes, not that code).
+    // tapes, not that code), and a tape runs each level's cells in one
+    // batch.
     let interpreted: Vec<Arc<dyn Evaluator>> = evaluators
         .iter()
         .map(|e| match e.function() {
-            Some(f) => Arc::new(Interpreter::new(f.clone())) as Arc<dyn Evaluator>,
+            Some(f) => Arc::new(TapeEvaluator::of_function(f)) as Arc<dyn Evaluator>,
             None => Arc::clone(e),
         })
         .collect();
@@ -275,6 +276,7 @@ pub fn frame_box(cam: &Camera, b: &Bounds, width: u32, height: u32) -> Option<Ca
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::eval::interp::Interpreter;
     use crate::ir::{BinaryOp, Builder, Function, Var};
     use crate::scene::{Light, Object, RenderSettings};
 
