@@ -4,10 +4,11 @@
 //! turned into an `eval::tape::Tape`.
 //!
 //! Checked, per the contract in `src/eval/tape.rs`:
-//! - batched points and boxes give the same bits as the interpreter's
-//!   `point` and `interval` (NaN equal to NaN, empty equal to empty), at
-//!   points and boxes from the bytes, edge values (signed zeros,
-//!   infinities, NaN, huge) included;
+//! - batched and single points and boxes, interval gradients and
+//!   derivatives along a box of directions give the same bits as the
+//!   interpreter's `point`, `interval`, `interval_grad` and `interval_dir`
+//!   (NaN equal to NaN, empty equal to empty), at points and boxes from
+//!   the bytes, edge values (signed zeros, infinities, NaN, huge) included;
 //! - a tape pruned to a box from the bytes, and that pruned tape pruned
 //!   again to a sub-box (pruning nests), is valid IR and gives the same
 //!   point bits as the whole function at the corners, the centre and
@@ -141,6 +142,11 @@ fuzz_target!(|data: &[u8]| {
             same(w, *v),
             "point batch at {p:?}: interpreter {w:e}, tape {v:e} ({ctx})"
         );
+        let s = tape.point(*p, &mut ws);
+        assert!(
+            same(w, s),
+            "point at {p:?}: interpreter {w:e}, tape {s:e} ({ctx})"
+        );
     }
     let mut boxes: Vec<[Interval; 3]> = rest
         .chunks_exact(6)
@@ -161,6 +167,23 @@ fuzz_target!(|data: &[u8]| {
         assert!(
             same_iv(w, *v),
             "interval batch over {b:?}: interpreter {w:?}, tape {v:?} ({ctx})"
+        );
+        let s = tape.interval(*b, &mut ws);
+        assert!(
+            same_iv(w, s),
+            "interval over {b:?}: interpreter {w:?}, tape {s:?} ({ctx})"
+        );
+        // The derivative kinds by the same rules over the registers.
+        let (tg, ig) = (tape.interval_grad(*b, &mut ws), whole.interval_grad(*b));
+        assert!(
+            same_iv(tg.v, ig.v) && (0..3).all(|k| same_iv(tg.d[k], ig.d[k])),
+            "interval gradient over {b:?}: interpreter {ig:?}, tape {tg:?} ({ctx})"
+        );
+        let v = inner;
+        let (td, id) = (tape.interval_dir(*b, v, &mut ws), whole.interval_dir(*b, v));
+        assert!(
+            same_iv(td[0], id[0]) && same_iv(td[1], id[1]),
+            "derivative along {v:?} over {b:?}: interpreter {id:?}, tape {td:?} ({ctx})"
         );
     }
 

@@ -292,8 +292,33 @@ fn bits(b: &IBox) -> [u64; 6] {
 pub struct CornerRays(pub [(IBox, IBox); 4]);
 
 impl CornerRays {
-    /// A sound hull of the block's ray points for t ∈ `t`.
+    /// A sound hull of the block's ray points for t ∈ `t`: the hull of the
+    /// corner rays' points at both ends.
+    ///
+    /// Each bound of a ray's point at a fixed t is a monotone function of
+    /// the bounds of its origin and direction (outward rounding is
+    /// monotone), so where the corners share one direction (parallel
+    /// rays) that hull is, to the bit, the point of the origins' hull, and
+    /// where they share one origin (a pinhole) that of the directions'
+    /// hull: two ray points instead of eight.
     pub fn hull(&self, t: Interval) -> IBox {
+        let c = &self.0;
+        let shared = |part: fn(&(IBox, IBox)) -> IBox| {
+            c.iter().all(|r| bits(&part(r)) == bits(&part(&c[0])))
+        };
+        let (o, d) = if shared(|r| r.1) {
+            (self.origins(), c[0].1)
+        } else if shared(|r| r.0) {
+            (c[0].0, self.directions())
+        } else {
+            return self.hull_of_corners(t);
+        };
+        let at = |tc: f64| ray_box(o, d, Interval::point(tc));
+        box_hull(at(t.lo), at(t.hi))
+    }
+
+    // [`CornerRays::hull`] corner by corner.
+    fn hull_of_corners(&self, t: Interval) -> IBox {
         let mut out = ray_box(self.0[0].0, self.0[0].1, Interval::point(t.lo));
         for (o, d) in &self.0 {
             for tc in [t.lo, t.hi] {
@@ -385,6 +410,36 @@ mod tests {
                 projection: Projection::Orthographic { width: 3.0 },
             },
         ]
+    }
+
+    #[test]
+    fn shared_origins_or_directions_give_the_corners_hull_to_the_bit() {
+        let mut rng = crate::ir::random::Rng::new(5);
+        let mut perspective = Camera::default();
+        perspective.eye = [1e3, -2e-3, 7.0];
+        let mut shortcuts = 0;
+        for cam in cams().into_iter().chain([perspective]) {
+            let rc = RayCamera::new(&cam, 640, 480).unwrap();
+            for _ in 0..2000 {
+                let x0 = rng.range(-50.0, 700.0);
+                let y0 = rng.range(-50.0, 500.0);
+                let c = rc.corners(
+                    (x0, x0 + rng.range(0.0, 64.0)),
+                    (y0, y0 + rng.range(0.0, 64.0)),
+                );
+                let a = rng.range(-3.0, 20.0);
+                let t = Interval::new(a, a + rng.range(0.0, 10.0));
+                assert_eq!(bits(&c.hull(t)), bits(&c.hull_of_corners(t)), "{t:?} {c:?}");
+                let same = |k: usize| {
+                    c.0.iter()
+                        .all(|r| bits(&[r.0, r.1][k]) == bits(&[c.0[0].0, c.0[0].1][k]))
+                };
+                shortcuts += usize::from(same(0) || same(1));
+            }
+        }
+        // Both cameras' blocks take the shortcut (parallel rays share a
+        // direction, a pinhole's an origin).
+        assert!(shortcuts > 5000, "{shortcuts} of 6000");
     }
 
     #[test]
