@@ -272,6 +272,71 @@ pub(crate) fn dual_powi<const S: usize>((a, x): IntervalDual<S>, n: i32) -> Inte
     (v, first(d))
 }
 
+/// `f'(a)·x` by the reference rule (a partial known to be 0 stays +0).
+#[inline]
+fn point_chain(fp: f64, x: f64) -> f64 {
+    if x == 0.0 { 0.0 } else { fp * x }
+}
+
+/// `op(a)` and its three partials by the reference rules: the bits of the
+/// interpreter's [`Evaluator::point_grad`], with the ops of distance
+/// fields written out (see [`dual_unary`]).
+#[inline]
+pub(crate) fn point_dual_unary(op: UnaryOp, (a, x): (f64, [f64; 3])) -> (f64, [f64; 3]) {
+    match op {
+        UnaryOp::Neg => (-a, x.map(|x| -x)),
+        UnaryOp::Square => {
+            let fp = a + a;
+            (a * a, x.map(|x| point_chain(fp, x)))
+        }
+        UnaryOp::Sqrt => {
+            let v = a.sqrt();
+            let fp = 0.5 / v;
+            (v, x.map(|x| point_chain(fp, x)))
+        }
+        _ => {
+            let (v, d) = grad_unary(&mut Reference, op, (a, x.map(Some)));
+            (v, d.map(|d| d.unwrap_or(0.0)))
+        }
+    }
+}
+
+/// `op(a, b)` and its three partials (see [`point_dual_unary`]).
+#[inline]
+pub(crate) fn point_dual_binary(
+    op: BinaryOp,
+    (a, x): (f64, [f64; 3]),
+    (b, y): (f64, [f64; 3]),
+) -> (f64, [f64; 3]) {
+    let zip = |f: &dyn Fn(f64, f64) -> f64| -> [f64; 3] { std::array::from_fn(|k| f(x[k], y[k])) };
+    let pick = |first: bool| -> [f64; 3] {
+        if a.is_nan() || b.is_nan() {
+            [f64::NAN; 3]
+        } else if first {
+            x
+        } else {
+            y
+        }
+    };
+    match op {
+        BinaryOp::Add => (a + b, zip(&|x, y| x + y)),
+        BinaryOp::Sub => (a - b, zip(&|x, y| x - y)),
+        BinaryOp::Mul => (a * b, zip(&|x, y| point_chain(b, x) + point_chain(a, y))),
+        BinaryOp::Min => (point_binary(op, a, b), pick(a < b)),
+        BinaryOp::Max => (point_binary(op, a, b), pick(a > b)),
+        _ => {
+            let (v, d) = grad_binary(&mut Reference, op, (a, x.map(Some)), (b, y.map(Some)));
+            (v, d.map(|d| d.unwrap_or(0.0)))
+        }
+    }
+}
+
+/// `a^n` and its three partials (see [`point_dual_unary`]).
+pub(crate) fn point_dual_powi((a, x): (f64, [f64; 3]), n: i32) -> (f64, [f64; 3]) {
+    let (v, d) = grad_powi(&mut Reference, (a, x.map(Some)), i64::from(n));
+    (v, d.map(|d| d.unwrap_or(0.0)))
+}
+
 /// The reference evaluator: walks the op list once per evaluation.
 #[derive(Clone, Debug)]
 pub struct Interpreter {

@@ -28,8 +28,11 @@
 
 use std::sync::Arc;
 
-use crate::eval::IntervalGrad;
-use crate::eval::interp::{IntervalDual, dual_binary, dual_powi, dual_unary};
+use crate::eval::interp::{
+    IntervalDual, dual_binary, dual_powi, dual_unary, point_dual_binary, point_dual_powi,
+    point_dual_unary,
+};
+use crate::eval::{Grad, IntervalGrad};
 use crate::interval::Interval;
 use crate::ir::prune::{
     Facts, binary_facts, const_facts, decided_operand, powi_facts, unary_facts, var_facts,
@@ -84,6 +87,7 @@ pub struct Tape {
 pub struct Workspace {
     points: Vec<f64>,
     intervals: Vec<Interval>,
+    point_duals: Vec<(f64, [f64; 3])>,
     dir: Vec<IntervalDual<1>>,
     grad: Vec<IntervalDual<3>>,
     // Scratch of `Tape::prune`: facts per register, aliases and liveness
@@ -226,6 +230,32 @@ impl Tape {
             m[o as usize] = v;
         }
         m[self.root_reg()]
+    }
+
+    /// f and its gradient at `p`, the same bits as the reference
+    /// interpreter's [`crate::eval::Evaluator::point_grad`].
+    pub fn point_grad(&self, p: [f64; 3], ws: &mut Workspace) -> Grad {
+        let m = &mut ws.point_duals;
+        m.clear();
+        m.resize(self.registers, (0.0, [0.0; 3]));
+        for instr in &self.code {
+            let (o, d) = match *instr {
+                Instr::Var(o, var) => {
+                    let mut d = [0.0; 3];
+                    d[var.index()] = 1.0;
+                    (o, (p[var.index()], d))
+                }
+                Instr::Const(o, c) => (o, (c, [0.0; 3])),
+                Instr::Unary(o, op, a) => (o, point_dual_unary(op, m[a as usize])),
+                Instr::Binary(o, op, a, c) => {
+                    (o, point_dual_binary(op, m[a as usize], m[c as usize]))
+                }
+                Instr::Powi(o, a, k) => (o, point_dual_powi(m[a as usize], k)),
+            };
+            m[o as usize] = d;
+        }
+        let (v, d) = m[self.root_reg()];
+        Grad { v, d }
     }
 
     /// F over `b` and its derivative along every direction in `v`, the

@@ -1,6 +1,5 @@
-//! An evaluator that runs a [`Tape`]: values and intervals in one pass
-//! over its registers, batches column by column, derivatives by the
-//! reference rules over the tape's ops.
+//! An evaluator that runs a [`Tape`]: values, intervals and their
+//! derivatives in one pass over its registers, batches column by column.
 //!
 //! Pruned tapes answer most evaluations of a render (see
 //! [`crate::eval::regional`]); interpreting them through the tape instead
@@ -11,7 +10,6 @@
 
 use std::sync::Arc;
 
-use crate::eval::interp::Interpreter;
 use crate::eval::tape::{Tape, with_workspace};
 use crate::eval::{Evaluator, Grad, IntervalGrad};
 use crate::interval::Interval;
@@ -24,15 +22,12 @@ const CHUNK: usize = 256;
 /// A [`Tape`] as an [`Evaluator`].
 pub struct TapeEvaluator {
     tape: Tape,
-    // The reference rules over the tape's ops, for the derivative kinds.
-    derivatives: Interpreter,
 }
 
 impl TapeEvaluator {
     /// An evaluator running `tape`.
     pub fn new(tape: Tape) -> TapeEvaluator {
-        let derivatives = Interpreter::shared(tape.shared_function());
-        TapeEvaluator { tape, derivatives }
+        TapeEvaluator { tape }
     }
 
     /// An evaluator running the tape of `f`.
@@ -52,7 +47,7 @@ impl Evaluator for TapeEvaluator {
     }
 
     fn point_grad(&self, p: [f64; 3]) -> Grad {
-        self.derivatives.point_grad(p)
+        with_workspace(|ws| self.tape.point_grad(p, ws))
     }
 
     fn interval(&self, b: [Interval; 3]) -> Interval {

@@ -415,8 +415,10 @@ mod tests {
     #[test]
     fn shared_origins_or_directions_give_the_corners_hull_to_the_bit() {
         let mut rng = crate::ir::random::Rng::new(5);
-        let mut perspective = Camera::default();
-        perspective.eye = [1e3, -2e-3, 7.0];
+        let perspective = Camera {
+            eye: [1e3, -2e-3, 7.0],
+            ..Camera::default()
+        };
         let mut shortcuts = 0;
         for cam in cams().into_iter().chain([perspective]) {
             let rc = RayCamera::new(&cam, 640, 480).unwrap();
