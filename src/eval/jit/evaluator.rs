@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 use super::raw::{Code, IntervalBatchFn, IntervalFn, PointBatchFn, PointFn, PointGradFn};
 use super::{JitError, Kind, compile, lower};
-use crate::eval::interp::Interpreter;
+use crate::eval::taped::TapeEvaluator;
 use crate::eval::{Evaluator, Grad, IntervalGrad};
 use crate::interval::Interval;
 use crate::ir::Function;
@@ -55,8 +55,10 @@ struct Inner {
     slots: [OnceLock<Slot>; Kind::ALL.len()],
     // Whether a background compilation of each kind has been started.
     started: [AtomicBool; Kind::ALL.len()],
-    // Answers for the kinds still compiling in the background.
-    interp: OnceLock<Interpreter>,
+    // Answers for the kinds still compiling in the background (and the
+    // derivative kinds of a long function): the function's tape, the
+    // reference rules over registers.
+    interp: OnceLock<TapeEvaluator>,
     // More live ops than `DERIVATIVES_MAX_OPS` (counted once, not per call).
     long: bool,
 }
@@ -105,7 +107,7 @@ pub struct JitEvaluator {
 /// compiles (or instead of it).
 enum Answer<'a> {
     Native(&'a Entry),
-    Interpreted(&'a Interpreter),
+    Interpreted(&'a TapeEvaluator),
     Failed,
 }
 
@@ -183,10 +185,10 @@ impl JitEvaluator {
         Answer::Interpreted(self.interpreter())
     }
 
-    fn interpreter(&self) -> &Interpreter {
+    fn interpreter(&self) -> &TapeEvaluator {
         self.inner
             .interp
-            .get_or_init(|| Interpreter::new((*self.inner.f).clone()))
+            .get_or_init(|| TapeEvaluator::of_function(&self.inner.f))
     }
 
     /// The kinds compiled so far and how long each took to compile.
@@ -317,6 +319,7 @@ impl Evaluator for JitEvaluator {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::eval::interp::Interpreter;
     use crate::ir::random::{Rng, random_function};
 
     fn same(a: f64, b: f64) -> bool {
