@@ -45,30 +45,101 @@ use crate::ir::{BinaryOp, Function, Op, UnaryOp, ValueId, Var};
 /// A register index.
 pub type Reg = u32;
 
-/// One instruction: an op over registers.
+/// One instruction: an op over registers. The ops of distance fields and
+/// CSG have variants of their own, so that the scalar loops dispatch once
+/// per instruction rather than on the instruction and then on its op.
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub enum Instr {
     /// `out = var`.
     Var(Reg, Var),
     /// `out = c`.
     Const(Reg, f64),
-    /// `out = op(a)`.
+    /// `out = a + b`.
+    Add(Reg, Reg, Reg),
+    /// `out = a - b`.
+    Sub(Reg, Reg, Reg),
+    /// `out = a * b`.
+    Mul(Reg, Reg, Reg),
+    /// `out = min(a, b)`.
+    Min(Reg, Reg, Reg),
+    /// `out = max(a, b)`.
+    Max(Reg, Reg, Reg),
+    /// `out = -a`.
+    Neg(Reg, Reg),
+    /// `out = a²`.
+    Square(Reg, Reg),
+    /// `out = sqrt(a)`.
+    Sqrt(Reg, Reg),
+    /// `out = op(a)`, any other one-operand op.
     Unary(Reg, UnaryOp, Reg),
-    /// `out = op(a, b)`.
+    /// `out = op(a, b)`, any other two-operand op.
     Binary(Reg, BinaryOp, Reg, Reg),
     /// `out = a^n`.
     Powi(Reg, Reg, i32),
 }
 
+/// An instruction in general form: one variant per arity (what the
+/// loops that treat every op alike match on).
+#[derive(Copy, Clone, Debug, PartialEq)]
+enum Form {
+    Var(Reg, Var),
+    Const(Reg, f64),
+    Unary(Reg, UnaryOp, Reg),
+    Binary(Reg, BinaryOp, Reg, Reg),
+    Powi(Reg, Reg, i32),
+}
+
 impl Instr {
+    /// `out = op(a)`.
+    pub fn unary(out: Reg, op: UnaryOp, a: Reg) -> Instr {
+        match op {
+            UnaryOp::Neg => Instr::Neg(out, a),
+            UnaryOp::Square => Instr::Square(out, a),
+            UnaryOp::Sqrt => Instr::Sqrt(out, a),
+            _ => Instr::Unary(out, op, a),
+        }
+    }
+
+    /// `out = op(a, b)`.
+    pub fn binary(out: Reg, op: BinaryOp, a: Reg, b: Reg) -> Instr {
+        match op {
+            BinaryOp::Add => Instr::Add(out, a, b),
+            BinaryOp::Sub => Instr::Sub(out, a, b),
+            BinaryOp::Mul => Instr::Mul(out, a, b),
+            BinaryOp::Min => Instr::Min(out, a, b),
+            BinaryOp::Max => Instr::Max(out, a, b),
+            _ => Instr::Binary(out, op, a, b),
+        }
+    }
+
+    /// The instruction in general form.
+    #[inline]
+    fn form(self) -> Form {
+        match self {
+            Instr::Var(o, v) => Form::Var(o, v),
+            Instr::Const(o, c) => Form::Const(o, c),
+            Instr::Add(o, a, b) => Form::Binary(o, BinaryOp::Add, a, b),
+            Instr::Sub(o, a, b) => Form::Binary(o, BinaryOp::Sub, a, b),
+            Instr::Mul(o, a, b) => Form::Binary(o, BinaryOp::Mul, a, b),
+            Instr::Min(o, a, b) => Form::Binary(o, BinaryOp::Min, a, b),
+            Instr::Max(o, a, b) => Form::Binary(o, BinaryOp::Max, a, b),
+            Instr::Neg(o, a) => Form::Unary(o, UnaryOp::Neg, a),
+            Instr::Square(o, a) => Form::Unary(o, UnaryOp::Square, a),
+            Instr::Sqrt(o, a) => Form::Unary(o, UnaryOp::Sqrt, a),
+            Instr::Unary(o, op, a) => Form::Unary(o, op, a),
+            Instr::Binary(o, op, a, b) => Form::Binary(o, op, a, b),
+            Instr::Powi(o, a, n) => Form::Powi(o, a, n),
+        }
+    }
+
     /// The register it writes.
     pub fn out(&self) -> Reg {
-        match *self {
-            Instr::Var(o, _)
-            | Instr::Const(o, _)
-            | Instr::Unary(o, ..)
-            | Instr::Binary(o, ..)
-            | Instr::Powi(o, ..) => o,
+        match self.form() {
+            Form::Var(o, _)
+            | Form::Const(o, _)
+            | Form::Unary(o, ..)
+            | Form::Binary(o, ..)
+            | Form::Powi(o, ..) => o,
         }
     }
 }
@@ -174,37 +245,29 @@ impl Tape {
     }
 
     /// f at `p`, the same bits as the reference interpreter: one pass over
-    /// the registers, with the common ops written inline (the reference
-    /// rules' `match` per op, a call each, costs more than the op).
+    /// the registers, one dispatch per instruction, the common ops inline
+    /// (the reference rules' `match` per op, a call each, costs more than
+    /// the op).
     pub fn point(&self, p: [f64; 3], ws: &mut Workspace) -> f64 {
         let m = &mut ws.points;
         m.clear();
         m.resize(self.registers, 0.0);
         for instr in &self.code {
+            let r = |a: Reg| m[a as usize];
             let (o, v) = match *instr {
                 Instr::Var(o, v) => (o, p[v.index()]),
                 Instr::Const(o, c) => (o, c),
-                Instr::Unary(o, op, a) => {
-                    let a = m[a as usize];
-                    let v = match op {
-                        UnaryOp::Neg => -a,
-                        UnaryOp::Square => a * a,
-                        UnaryOp::Sqrt => a.sqrt(),
-                        _ => point_unary(op, a),
-                    };
-                    (o, v)
-                }
-                Instr::Binary(o, op, a, b) => {
-                    let (a, b) = (m[a as usize], m[b as usize]);
-                    let v = match op {
-                        BinaryOp::Add => a + b,
-                        BinaryOp::Sub => a - b,
-                        BinaryOp::Mul => a * b,
-                        _ => point_binary(op, a, b),
-                    };
-                    (o, v)
-                }
-                Instr::Powi(o, a, k) => (o, point_powi(m[a as usize], k)),
+                Instr::Add(o, a, b) => (o, r(a) + r(b)),
+                Instr::Sub(o, a, b) => (o, r(a) - r(b)),
+                Instr::Mul(o, a, b) => (o, r(a) * r(b)),
+                Instr::Min(o, a, b) => (o, point_binary(BinaryOp::Min, r(a), r(b))),
+                Instr::Max(o, a, b) => (o, point_binary(BinaryOp::Max, r(a), r(b))),
+                Instr::Neg(o, a) => (o, -r(a)),
+                Instr::Square(o, a) => (o, r(a) * r(a)),
+                Instr::Sqrt(o, a) => (o, r(a).sqrt()),
+                Instr::Unary(o, op, a) => (o, point_unary(op, r(a))),
+                Instr::Binary(o, op, a, b) => (o, point_binary(op, r(a), r(b))),
+                Instr::Powi(o, a, k) => (o, point_powi(r(a), k)),
             };
             m[o as usize] = v;
         }
@@ -218,14 +281,21 @@ impl Tape {
         m.clear();
         m.resize(self.registers, Interval::point(0.0));
         for instr in &self.code {
+            let r = |a: Reg| m[a as usize];
             let (o, v) = match *instr {
                 Instr::Var(o, v) => (o, b[v.index()]),
                 Instr::Const(o, c) => (o, Interval::point(c)),
-                Instr::Unary(o, op, a) => (o, interval_unary_inline(op, m[a as usize])),
-                Instr::Binary(o, op, a, b) => {
-                    (o, interval_binary_inline(op, m[a as usize], m[b as usize]))
-                }
-                Instr::Powi(o, a, k) => (o, m[a as usize].powi(k)),
+                Instr::Add(o, a, b) => (o, r(a).add(r(b))),
+                Instr::Sub(o, a, b) => (o, r(a).sub(r(b))),
+                Instr::Mul(o, a, b) => (o, r(a).mul(r(b))),
+                Instr::Min(o, a, b) => (o, r(a).min(r(b))),
+                Instr::Max(o, a, b) => (o, r(a).max(r(b))),
+                Instr::Neg(o, a) => (o, r(a).neg()),
+                Instr::Square(o, a) => (o, r(a).square()),
+                Instr::Sqrt(o, a) => (o, r(a).sqrt()),
+                Instr::Unary(o, op, a) => (o, interval_unary(op, r(a))),
+                Instr::Binary(o, op, a, b) => (o, interval_binary(op, r(a), r(b))),
+                Instr::Powi(o, a, k) => (o, r(a).powi(k)),
             };
             m[o as usize] = v;
         }
@@ -239,18 +309,18 @@ impl Tape {
         m.clear();
         m.resize(self.registers, (0.0, [0.0; 3]));
         for instr in &self.code {
-            let (o, d) = match *instr {
-                Instr::Var(o, var) => {
+            let (o, d) = match instr.form() {
+                Form::Var(o, var) => {
                     let mut d = [0.0; 3];
                     d[var.index()] = 1.0;
                     (o, (p[var.index()], d))
                 }
-                Instr::Const(o, c) => (o, (c, [0.0; 3])),
-                Instr::Unary(o, op, a) => (o, point_dual_unary(op, m[a as usize])),
-                Instr::Binary(o, op, a, c) => {
+                Form::Const(o, c) => (o, (c, [0.0; 3])),
+                Form::Unary(o, op, a) => (o, point_dual_unary(op, m[a as usize])),
+                Form::Binary(o, op, a, c) => {
                     (o, point_dual_binary(op, m[a as usize], m[c as usize]))
                 }
-                Instr::Powi(o, a, k) => (o, point_dual_powi(m[a as usize], k)),
+                Form::Powi(o, a, k) => (o, point_dual_powi(m[a as usize], k)),
             };
             m[o as usize] = d;
         }
@@ -291,12 +361,12 @@ impl Tape {
         m.clear();
         m.resize(self.registers, (zero, [zero; S]));
         for instr in &self.code {
-            let (o, d) = match *instr {
-                Instr::Var(o, var) => (o, (b[var.index()], seed[var.index()])),
-                Instr::Const(o, c) => (o, (Interval::point(c), [zero; S])),
-                Instr::Unary(o, op, a) => (o, dual_unary(op, m[a as usize])),
-                Instr::Binary(o, op, a, c) => (o, dual_binary(op, m[a as usize], m[c as usize])),
-                Instr::Powi(o, a, k) => (o, dual_powi(m[a as usize], k)),
+            let (o, d) = match instr.form() {
+                Form::Var(o, var) => (o, (b[var.index()], seed[var.index()])),
+                Form::Const(o, c) => (o, (Interval::point(c), [zero; S])),
+                Form::Unary(o, op, a) => (o, dual_unary(op, m[a as usize])),
+                Form::Binary(o, op, a, c) => (o, dual_binary(op, m[a as usize], m[c as usize])),
+                Form::Powi(o, a, k) => (o, dual_powi(m[a as usize], k)),
             };
             m[o as usize] = d;
         }
@@ -313,20 +383,20 @@ impl Tape {
         m.resize(self.registers * n, 0.0);
         for instr in &self.code {
             let col = |r: Reg| r as usize * n;
-            match *instr {
-                Instr::Var(o, v) => {
+            match instr.form() {
+                Form::Var(o, v) => {
                     let src = [xs, ys, zs][v.index()];
                     m[col(o)..col(o) + n].copy_from_slice(src);
                 }
-                Instr::Const(o, c) => m[col(o)..col(o) + n].fill(c),
-                Instr::Unary(o, op, a) => {
+                Form::Const(o, c) => m[col(o)..col(o) + n].fill(c),
+                Form::Unary(o, op, a) => {
                     let (o, a) = (col(o), col(a));
                     for i in 0..n {
                         m[o + i] = point_unary(op, m[a + i]);
                     }
                 }
-                Instr::Binary(o, op, a, b) => point_binary_column(m, op, n, [o, a, b].map(col)),
-                Instr::Powi(o, a, k) => {
+                Form::Binary(o, op, a, b) => point_binary_column(m, op, n, [o, a, b].map(col)),
+                Form::Powi(o, a, k) => {
                     let (o, a) = (col(o), col(a));
                     for i in 0..n {
                         m[o + i] = point_powi(m[a + i], k);
@@ -353,22 +423,22 @@ impl Tape {
         m.resize(self.registers * n, Interval::point(0.0));
         for instr in &self.code {
             let col = |r: Reg| r as usize * n;
-            match *instr {
-                Instr::Var(o, v) => {
+            match instr.form() {
+                Form::Var(o, v) => {
                     for (i, b) in boxes.iter().enumerate() {
                         m[col(o) + i] = b[v.index()];
                     }
                 }
-                Instr::Const(o, c) => m[col(o)..col(o) + n].fill(Interval::point(c)),
-                Instr::Unary(o, op, a) => {
+                Form::Const(o, c) => m[col(o)..col(o) + n].fill(Interval::point(c)),
+                Form::Unary(o, op, a) => {
                     let (o, a) = (col(o), col(a));
                     interval_unary_column(m, op, n, [o, a]);
                 }
-                Instr::Binary(o, op, a, b) => {
+                Form::Binary(o, op, a, b) => {
                     let (o, a, b) = (col(o), col(a), col(b));
                     interval_binary_column(m, op, n, [o, a, b]);
                 }
-                Instr::Powi(o, a, k) => {
+                Form::Powi(o, a, k) => {
                     let (o, a) = (col(o), col(a));
                     for i in 0..n {
                         m[o + i] = m[a + i].powi(k);
@@ -412,18 +482,18 @@ impl Tape {
         let mut decided = 0;
         for (k, instr) in self.code.iter().enumerate() {
             let at = |r: Reg| (regs[r as usize], fact[r as usize]);
-            let (out, v, f) = match *instr {
-                Instr::Var(o, var) => {
+            let (out, v, f) = match instr.form() {
+                Form::Var(o, var) => {
                     let v = b[var.index()];
                     (o, v, var_facts(v))
                 }
-                Instr::Const(o, c) => (o, Interval::point(c), const_facts(c)),
-                Instr::Unary(o, u, a) => {
+                Form::Const(o, c) => (o, Interval::point(c), const_facts(c)),
+                Form::Unary(o, u, a) => {
                     let a = at(a);
                     let v = interval_unary_inline(u, a.0);
                     (o, v, unary_facts(u, a, v))
                 }
-                Instr::Binary(o, op, x, y) => {
+                Form::Binary(o, op, x, y) => {
                     let (x, y) = (at(x), at(y));
                     if let Some(w) = decided_operand(op, x, y)
                         && let Op::Binary(_, xa, ya) = ops[k]
@@ -434,7 +504,7 @@ impl Tape {
                     let v = interval_binary_inline(op, x.0, y.0);
                     (o, v, binary_facts(op, x, y, v))
                 }
-                Instr::Powi(o, a, p) => {
+                Form::Powi(o, a, p) => {
                     let a = at(a);
                     let v = a.0.powi(p);
                     (o, v, powi_facts(p, a, v))
@@ -518,12 +588,12 @@ impl Tape {
                 Op::Const(c) => (Op::Const(c), Instr::Const(out, c)),
                 Op::Unary(u, a) => {
                     let (ia, ra) = operand(a);
-                    (Op::Unary(u, ia), Instr::Unary(out, u, ra))
+                    (Op::Unary(u, ia), Instr::unary(out, u, ra))
                 }
                 Op::Binary(o, a, b) => {
                     let (ia, ra) = operand(a);
                     let (ib, rb) = operand(b);
-                    (Op::Binary(o, ia, ib), Instr::Binary(out, o, ra, rb))
+                    (Op::Binary(o, ia, ib), Instr::binary(out, o, ra, rb))
                 }
                 Op::Powi(a, p) => {
                     let (ia, ra) = operand(a);

@@ -82,7 +82,8 @@ impl Inner {
 /// kinds: those are not bit for bit the interpreter's (rounding order in
 /// the chain rules), so they cannot be swapped in once compiled, and
 /// compiling them for a function this long would stop a render for
-/// seconds. The interpreter answers them.
+/// seconds. The function's tape ([`TapeEvaluator`], the interpreter's
+/// rules and bits) answers them.
 pub const DERIVATIVES_MAX_OPS: usize = 4096;
 
 /// Native evaluators of one function, each kind compiled on first use.
@@ -95,7 +96,7 @@ pub const DERIVATIVES_MAX_OPS: usize = 4096;
 /// By default a kind compiles on the calling thread at its first use.
 /// [`JitEvaluator::in_background`] makes the kinds whose answers are the
 /// interpreter's bit for bit (point, interval and their batches) compile
-/// on a thread of their own instead, the interpreter answering until the
+/// on a thread of their own instead, the function's tape answering until the
 /// code is ready: a render never waits for them, and its pixels do not
 /// depend on when the code arrives.
 pub struct JitEvaluator {
