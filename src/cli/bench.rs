@@ -5,6 +5,7 @@ use super::render::MethodArg;
 use super::{CliError, EvalKind, build_evaluator};
 use ibeam::eval::Evaluator;
 use ibeam::eval::jit::JitEvaluator;
+use ibeam::eval::taped::TapeEvaluator;
 use ibeam::interval::Interval;
 use ibeam::ir::passes::simplify;
 use ibeam::render::{RenderOptions, RenderStats, render};
@@ -25,7 +26,8 @@ pub struct Args {
 /// The benchmarks.
 #[derive(clap::Subcommand, Debug)]
 pub enum What {
-    /// Evaluator throughput, interpreter against JIT, and JIT compile time.
+    /// Evaluator throughput, interpreter against JIT and against the tape
+    /// evaluator, and JIT compile time.
     Eval(EvalArgs),
     /// Render times and rays traced: beam against per-pixel and point
     /// sampling, with shadows as the scene sets them.
@@ -147,6 +149,9 @@ fn bench_eval(args: &EvalArgs) -> Result<(), CliError> {
         "| scene | ops | interp points/s | JIT points/s | JIT batch points/s | point speedup | interp boxes/s | JIT boxes/s | JIT batch boxes/s | box speedup | JIT compile ms (all kinds) |"
     );
     println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    // The tape evaluator (what pruned regions answer with) against the
+    // interpreter, printed as a second table after the first.
+    let mut tape_rows = Vec::new();
     for file in &files {
         let scene = ibeam::lang::load_scene(file)?;
         let object = &scene.objects[0];
@@ -193,6 +198,33 @@ fn bench_eval(args: &EvalArgs) -> Result<(), CliError> {
             jit.interval_batch(&boxes, &mut iout);
             black_box(&iout);
         });
+        let tape = TapeEvaluator::of_function(&f);
+        let tape_pts = single_points(&tape);
+        let tape_boxes = single_boxes(&tape);
+        let tape_batch_boxes = rate(min, BATCH, || {
+            tape.interval_batch(&boxes, &mut iout);
+            black_box(&iout);
+        });
+        let along = [0.3, -0.5, 0.8].map(Interval::point);
+        let dirs = |e: &dyn Evaluator| {
+            rate(min, BATCH, || {
+                for b in &boxes {
+                    black_box(e.interval_dir(black_box(*b), along));
+                }
+            })
+        };
+        tape_rows.push(format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            file.display(),
+            f.len(),
+            si(interp_pts),
+            si(tape_pts),
+            si(interp_boxes),
+            si(tape_boxes),
+            si(tape_batch_boxes),
+            si(dirs(interp.as_ref())),
+            si(dirs(&tape)),
+        ));
         println!(
             "| {} | {} | {} | {} | {} | {:.1}x | {} | {} | {} | {:.1}x | {:.2} |",
             file.display(),
@@ -207,6 +239,14 @@ fn bench_eval(args: &EvalArgs) -> Result<(), CliError> {
             jit_boxes.max(jit_batch_boxes) / interp_boxes,
             compile_ms,
         );
+    }
+    println!();
+    println!(
+        "| scene | ops | interp points/s | tape points/s | interp boxes/s | tape boxes/s | tape batch boxes/s | interp directional/s | tape directional/s |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for row in tape_rows {
+        println!("{row}");
     }
     Ok(())
 }
