@@ -8,8 +8,6 @@
 //! Every answer is the reference interpreter's bits (both call the rules
 //! of [`crate::ir::semantics`]); the conformance suite checks it.
 
-use std::sync::Arc;
-
 use crate::eval::tape::{Tape, with_workspace};
 use crate::eval::{Evaluator, Grad, IntervalGrad};
 use crate::interval::Interval;
@@ -83,9 +81,4 @@ impl Evaluator for TapeEvaluator {
             }
         })
     }
-}
-
-/// [`TapeEvaluator::new`], shared.
-pub fn shared(tape: Tape) -> Arc<TapeEvaluator> {
-    Arc::new(TapeEvaluator::new(tape))
 }
