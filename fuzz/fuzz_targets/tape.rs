@@ -3,7 +3,7 @@
 //! sometimes simplified first as the renderer tapes simplified functions)
 //! turned into an `eval::tape::Tape`.
 //!
-//! Checked, per the contract in `src/eval/tape.rs`:
+//! Checked, per the contract in `src/eval/tape/mod.rs`:
 //! - batched and single points and boxes, interval gradients and
 //!   derivatives along a box of directions give the same bits as the
 //!   interpreter's `point`, `interval`, `interval_grad` and `interval_dir`

@@ -1,0 +1,489 @@
+//! Tapes: a function's live ops in evaluation order with registers
+//! assigned, evaluated over many points or boxes per pass, and pruned to a
+//! region in two passes without rebuilding a [`Function`] (after Fidget).
+//!
+//! A [`Tape`] keeps two views of the same ops:
+//! - `ssa`: the ops as a [`Function`] whose root is its last op, which the
+//!   IR's printer and validator understand and pruning reads;
+//! - `code`: one [`Instr`] per op, reading and writing registers. A value
+//!   holds its register from its definition to its last use, so a tape
+//!   needs as many registers as values are alive at once (a few dozen for
+//!   a CSG tree of thousands of ops), and batch evaluation keeps one
+//!   column of the batch per register, not per op.
+//!
+//! Batch evaluation runs the loop over the batch inside each op, so that
+//! each op's loop is a tight pass over contiguous memory the compiler can
+//! vectorise. Every value is the same bits as the reference interpreter's
+//! (both call the rules of [`crate::ir::semantics`]).
+//!
+//! [`Tape::prune`] evaluates the tape's intervals over a box once,
+//! recording for each `min`/`max` whether one operand always wins there
+//! (the rules of [`crate::ir::prune`], so the pruned tape gives the same
+//! bits at every point of the box), then one backward pass writes the
+//! child tape: it keeps only what the root still reads through the
+//! decided nodes and assigns registers as it goes (a value's register is
+//! taken at its last use, met first when walking backwards, and freed at
+//! its definition). A child prunes further to a smaller box from its own
+//! tape, never from the whole function.
+
+use std::sync::Arc;
+
+use crate::eval::interp::IntervalDual;
+use crate::interval::Interval;
+use crate::ir::prune::{
+    Facts, binary_facts, const_facts, decided_operand, powi_facts, unary_facts, var_facts,
+};
+use crate::ir::semantics::{interval_binary, interval_unary};
+use crate::ir::{BinaryOp, Function, Op, UnaryOp, ValueId, Var};
+
+mod run;
+
+/// A register index.
+pub type Reg = u32;
+
+/// One instruction: an op over registers. The ops of distance fields and
+/// CSG have variants of their own, so that the scalar loops dispatch once
+/// per instruction rather than on the instruction and then on its op.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub enum Instr {
+    /// `out = var`.
+    Var(Reg, Var),
+    /// `out = c`.
+    Const(Reg, f64),
+    /// `out = a + b`.
+    Add(Reg, Reg, Reg),
+    /// `out = a - b`.
+    Sub(Reg, Reg, Reg),
+    /// `out = a * b`.
+    Mul(Reg, Reg, Reg),
+    /// `out = min(a, b)`.
+    Min(Reg, Reg, Reg),
+    /// `out = max(a, b)`.
+    Max(Reg, Reg, Reg),
+    /// `out = -a`.
+    Neg(Reg, Reg),
+    /// `out = a²`.
+    Square(Reg, Reg),
+    /// `out = sqrt(a)`.
+    Sqrt(Reg, Reg),
+    /// `out = op(a)`, any other one-operand op.
+    Unary(Reg, UnaryOp, Reg),
+    /// `out = op(a, b)`, any other two-operand op.
+    Binary(Reg, BinaryOp, Reg, Reg),
+    /// `out = a^n`.
+    Powi(Reg, Reg, i32),
+}
+
+/// An instruction in general form: one variant per arity (what the
+/// loops that treat every op alike match on).
+#[derive(Copy, Clone, Debug, PartialEq)]
+enum Form {
+    Var(Reg, Var),
+    Const(Reg, f64),
+    Unary(Reg, UnaryOp, Reg),
+    Binary(Reg, BinaryOp, Reg, Reg),
+    Powi(Reg, Reg, i32),
+}
+
+impl Instr {
+    /// `out = op(a)`.
+    pub fn unary(out: Reg, op: UnaryOp, a: Reg) -> Instr {
+        match op {
+            UnaryOp::Neg => Instr::Neg(out, a),
+            UnaryOp::Square => Instr::Square(out, a),
+            UnaryOp::Sqrt => Instr::Sqrt(out, a),
+            _ => Instr::Unary(out, op, a),
+        }
+    }
+
+    /// `out = op(a, b)`.
+    pub fn binary(out: Reg, op: BinaryOp, a: Reg, b: Reg) -> Instr {
+        match op {
+            BinaryOp::Add => Instr::Add(out, a, b),
+            BinaryOp::Sub => Instr::Sub(out, a, b),
+            BinaryOp::Mul => Instr::Mul(out, a, b),
+            BinaryOp::Min => Instr::Min(out, a, b),
+            BinaryOp::Max => Instr::Max(out, a, b),
+            _ => Instr::Binary(out, op, a, b),
+        }
+    }
+
+    /// The instruction in general form.
+    #[inline]
+    fn form(self) -> Form {
+        match self {
+            Instr::Var(o, v) => Form::Var(o, v),
+            Instr::Const(o, c) => Form::Const(o, c),
+            Instr::Add(o, a, b) => Form::Binary(o, BinaryOp::Add, a, b),
+            Instr::Sub(o, a, b) => Form::Binary(o, BinaryOp::Sub, a, b),
+            Instr::Mul(o, a, b) => Form::Binary(o, BinaryOp::Mul, a, b),
+            Instr::Min(o, a, b) => Form::Binary(o, BinaryOp::Min, a, b),
+            Instr::Max(o, a, b) => Form::Binary(o, BinaryOp::Max, a, b),
+            Instr::Neg(o, a) => Form::Unary(o, UnaryOp::Neg, a),
+            Instr::Square(o, a) => Form::Unary(o, UnaryOp::Square, a),
+            Instr::Sqrt(o, a) => Form::Unary(o, UnaryOp::Sqrt, a),
+            Instr::Unary(o, op, a) => Form::Unary(o, op, a),
+            Instr::Binary(o, op, a, b) => Form::Binary(o, op, a, b),
+            Instr::Powi(o, a, n) => Form::Powi(o, a, n),
+        }
+    }
+
+    /// The register it writes.
+    pub fn out(&self) -> Reg {
+        match self.form() {
+            Form::Var(o, _)
+            | Form::Const(o, _)
+            | Form::Unary(o, ..)
+            | Form::Binary(o, ..)
+            | Form::Powi(o, ..) => o,
+        }
+    }
+}
+
+/// A register-allocated evaluation tape (see the module doc).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Tape {
+    ssa: Arc<Function>,
+    code: Vec<Instr>,
+    registers: usize,
+}
+
+/// Per-thread scratch space for batch evaluation: one column of the batch
+/// per register, reused across calls.
+#[derive(Clone, Default, Debug)]
+pub struct Workspace {
+    points: Vec<f64>,
+    intervals: Vec<Interval>,
+    point_duals: Vec<(f64, [f64; 3])>,
+    dir: Vec<IntervalDual<1>>,
+    grad: Vec<IntervalDual<3>>,
+    // Scratch of `Tape::prune`: facts per register, aliases and liveness
+    // per op.
+    facts: Vec<Facts>,
+    alias: Vec<usize>,
+    live: Vec<bool>,
+    child: ChildScratch,
+}
+
+thread_local! {
+    static WORKSPACE: std::cell::RefCell<Workspace> = std::cell::RefCell::new(Workspace::default());
+}
+
+/// Runs `f` with this thread's batch workspace (for callers that evaluate
+/// tapes through `&self` APIs, such as the regional evaluator's batches).
+pub fn with_workspace<R>(f: impl FnOnce(&mut Workspace) -> R) -> R {
+    WORKSPACE.with(|ws| f(&mut ws.borrow_mut()))
+}
+
+/// The result of [`Tape::prune`].
+#[derive(Clone, Debug)]
+pub struct PrunedTape {
+    /// The tape restricted to the box.
+    pub tape: Tape,
+    /// How many `min`/`max` nodes were decided.
+    pub decided: usize,
+}
+
+impl Tape {
+    /// The tape of `f`'s live ops, scheduled depth first from the root:
+    /// each op comes just before the first op that reads it, so a tree of
+    /// n ops needs registers for about its depth, not its width (lowering
+    /// and the balancing pass put all the leaves of a long `min` first).
+    pub fn new(f: &Function) -> Tape {
+        let order = depth_first(f);
+        let mut index = vec![ValueId(0); f.ops.len()];
+        let mut ops = Vec::with_capacity(order.len());
+        for &i in &order {
+            index[i] = ValueId(ops.len() as u32);
+            ops.push(f.ops[i].map_operands(|a| index[a.index()]));
+        }
+        let root = index[f.root.index()];
+        let identity: Vec<usize> = (0..ops.len()).collect();
+        let ssa = Function { ops, root };
+        let mut live = Vec::new();
+        liveness(&ssa, &identity, &mut live);
+        Tape::write_child(&ssa, &identity, &live, &mut ChildScratch::default())
+    }
+
+    /// The ops as a function (its root is the last op).
+    pub fn function(&self) -> &Function {
+        &self.ssa
+    }
+
+    /// [`Tape::function`], shared (an interpreter of the tape holds it
+    /// without a copy).
+    pub fn shared_function(&self) -> Arc<Function> {
+        Arc::clone(&self.ssa)
+    }
+
+    /// The instructions, one per op of [`Tape::function`].
+    pub fn code(&self) -> &[Instr] {
+        &self.code
+    }
+
+    /// Number of ops.
+    pub fn len(&self) -> usize {
+        self.code.len()
+    }
+
+    /// Whether the tape has no op (never true: a tape has a root).
+    pub fn is_empty(&self) -> bool {
+        self.code.is_empty()
+    }
+
+    /// Registers the tape needs.
+    pub fn registers(&self) -> usize {
+        self.registers
+    }
+
+    fn root_reg(&self) -> usize {
+        self.code.last().map_or(0, |i| i.out() as usize)
+    }
+
+    /// The tape restricted to the box `b`: `None` when no `min`/`max` is
+    /// decided there (see the module doc and [`crate::ir::prune`]).
+    pub fn prune(&self, b: [Interval; 3], ws: &mut Workspace) -> Option<PrunedTape> {
+        self.prune_to_at_most(b, usize::MAX, ws)
+    }
+
+    /// [`Tape::prune`], but `None` as well when the child would keep more
+    /// than `max_len` ops (counted before it is written, which is most of
+    /// the cost of a pruning that does not pay).
+    pub fn prune_to_at_most(
+        &self,
+        b: [Interval; 3],
+        max_len: usize,
+        ws: &mut Workspace,
+    ) -> Option<PrunedTape> {
+        let ops = &self.ssa.ops;
+        let n = ops.len();
+        // Values and facts live in registers, as in evaluation: a few dozen
+        // slots, not one per op.
+        let regs = &mut ws.intervals;
+        regs.clear();
+        regs.resize(self.registers, Interval::point(0.0));
+        let fact = &mut ws.facts;
+        fact.clear();
+        fact.resize(self.registers, Facts::default());
+        // alias[k]: the op whose value op k always equals on the box.
+        let alias = &mut ws.alias;
+        alias.clear();
+        alias.extend(0..n);
+        let mut decided = 0;
+        for (k, instr) in self.code.iter().enumerate() {
+            let at = |r: Reg| (regs[r as usize], fact[r as usize]);
+            let (out, v, f) = match instr.form() {
+                Form::Var(o, var) => {
+                    let v = b[var.index()];
+                    (o, v, var_facts(v))
+                }
+                Form::Const(o, c) => (o, Interval::point(c), const_facts(c)),
+                Form::Unary(o, u, a) => {
+                    let a = at(a);
+                    let v = interval_unary_inline(u, a.0);
+                    (o, v, unary_facts(u, a, v))
+                }
+                Form::Binary(o, op, x, y) => {
+                    let (x, y) = (at(x), at(y));
+                    if let Some(w) = decided_operand(op, x, y)
+                        && let Op::Binary(_, xa, ya) = ops[k]
+                    {
+                        alias[k] = alias[[xa, ya][w].index()];
+                        decided += 1;
+                    }
+                    let v = interval_binary_inline(op, x.0, y.0);
+                    (o, v, binary_facts(op, x, y, v))
+                }
+                Form::Powi(o, a, p) => {
+                    let a = at(a);
+                    let v = a.0.powi(p);
+                    (o, v, powi_facts(p, a, v))
+                }
+            };
+            regs[out as usize] = v;
+            fact[out as usize] = f;
+        }
+        if decided == 0 {
+            return None;
+        }
+        // Ops the child keeps: those the root reads through the aliases.
+        let kept = liveness(&self.ssa, alias, &mut ws.live);
+        if kept > max_len {
+            return None;
+        }
+        Some(PrunedTape {
+            tape: Tape::write_child(&self.ssa, alias, &ws.live, &mut ws.child),
+            decided,
+        })
+    }
+
+    /// The one backward pass that writes a tape: the ops of `parent` marked
+    /// `live` (see [`liveness`]), each operand read through `alias`, with
+    /// registers assigned as it goes. Each op is written straight into its
+    /// final slot: a forward count over `live` gives every kept op its
+    /// index in the child first.
+    fn write_child(
+        parent: &Function,
+        alias: &[usize],
+        live: &[bool],
+        scratch: &mut ChildScratch,
+    ) -> Tape {
+        const NONE: Reg = Reg::MAX;
+        let n = parent.ops.len();
+        let index = &mut scratch.index;
+        index.clear();
+        index.reserve(n);
+        let mut kept = 0u32;
+        for &l in live {
+            index.push(ValueId(kept));
+            kept += u32::from(l);
+        }
+        let kept = kept as usize;
+        let root = alias[parent.root.index()];
+        let reg = &mut scratch.reg;
+        reg.clear();
+        reg.resize(n, NONE);
+        let free = &mut scratch.free;
+        free.clear();
+        let mut registers: Reg = 0;
+        let mut take = |free: &mut Vec<Reg>| {
+            free.pop().unwrap_or_else(|| {
+                registers += 1;
+                registers - 1
+            })
+        };
+        reg[root] = take(free);
+        let mut ops = vec![Op::Const(0.0); kept];
+        let mut code = vec![Instr::Const(0, 0.0); kept];
+        for k in (0..n).rev() {
+            if !live[k] {
+                continue;
+            }
+            let out = reg[k];
+            debug_assert!(
+                out != NONE,
+                "a live value has its register from its last use"
+            );
+            // Before its definition the value is not alive.
+            free.push(out);
+            let mut operand = |a: ValueId| {
+                let a = alias[a.index()];
+                if reg[a] == NONE {
+                    reg[a] = take(free);
+                }
+                (index[a], reg[a])
+            };
+            let (op, instr) = match parent.ops[k] {
+                Op::Var(v) => (Op::Var(v), Instr::Var(out, v)),
+                Op::Const(c) => (Op::Const(c), Instr::Const(out, c)),
+                Op::Unary(u, a) => {
+                    let (ia, ra) = operand(a);
+                    (Op::Unary(u, ia), Instr::unary(out, u, ra))
+                }
+                Op::Binary(o, a, b) => {
+                    let (ia, ra) = operand(a);
+                    let (ib, rb) = operand(b);
+                    (Op::Binary(o, ia, ib), Instr::binary(out, o, ra, rb))
+                }
+                Op::Powi(a, p) => {
+                    let (ia, ra) = operand(a);
+                    (Op::Powi(ia, p), Instr::Powi(out, ra, p))
+                }
+            };
+            let at = index[k].index();
+            ops[at] = op;
+            code[at] = instr;
+        }
+        Tape {
+            ssa: Arc::new(Function {
+                ops,
+                root: index[root],
+            }),
+            code,
+            registers: registers as usize,
+        }
+    }
+}
+
+/// Marks in `live` the ops of `f` its root reads through `alias` (an op
+/// is read in place of the ops that alias it) and returns how many.
+fn liveness(f: &Function, alias: &[usize], live: &mut Vec<bool>) -> usize {
+    let n = f.ops.len();
+    live.clear();
+    live.resize(n, false);
+    live[alias[f.root.index()]] = true;
+    let mut kept = 0;
+    for k in (0..n).rev() {
+        if live[k] && alias[k] == k {
+            kept += 1;
+            for a in f.ops[k].operands() {
+                live[alias[a.index()]] = true;
+            }
+        }
+    }
+    kept
+}
+
+/// Per-op scratch of writing a child tape.
+#[derive(Clone, Default, Debug)]
+pub struct ChildScratch {
+    reg: Vec<Reg>,
+    index: Vec<ValueId>,
+    free: Vec<Reg>,
+}
+
+/// The ops the root of `f` reads, in depth-first post-order (operands
+/// left to right before the op; an explicit stack, as functions may be
+/// millions of ops deep).
+fn depth_first(f: &Function) -> Vec<usize> {
+    let mut placed = vec![false; f.ops.len()];
+    let mut order = Vec::new();
+    // (op, whether its operands were pushed already)
+    let mut stack = vec![(f.root.index(), false)];
+    while let Some((i, expanded)) = stack.pop() {
+        if placed[i] {
+            continue;
+        }
+        if expanded {
+            placed[i] = true;
+            order.push(i);
+            continue;
+        }
+        stack.push((i, true));
+        let args: Vec<usize> = f.ops[i].operands().map(|a| a.index()).collect();
+        for &a in args.iter().rev() {
+            if !placed[a] {
+                stack.push((a, false));
+            }
+        }
+    }
+    order
+}
+
+/// [`interval_unary`] with the ops of distance fields and CSG inline.
+#[inline(always)]
+fn interval_unary_inline(op: UnaryOp, a: Interval) -> Interval {
+    match op {
+        UnaryOp::Neg => a.neg(),
+        UnaryOp::Square => a.square(),
+        UnaryOp::Sqrt => a.sqrt(),
+        UnaryOp::Abs => a.abs(),
+        _ => interval_unary(op, a),
+    }
+}
+
+/// [`interval_binary`] with the ops of distance fields and CSG inline.
+#[inline(always)]
+fn interval_binary_inline(op: BinaryOp, a: Interval, b: Interval) -> Interval {
+    match op {
+        BinaryOp::Add => a.add(b),
+        BinaryOp::Sub => a.sub(b),
+        BinaryOp::Mul => a.mul(b),
+        BinaryOp::Min => a.min(b),
+        BinaryOp::Max => a.max(b),
+        _ => interval_binary(op, a, b),
+    }
+}
+
+#[cfg(test)]
+mod tests;

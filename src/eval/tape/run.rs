@@ -1,0 +1,256 @@
+//! Running a tape: one point or box over its registers, with values,
+//! gradients or a directional derivative, and batches of points or boxes a
+//! column per register. Every result is the reference interpreter's bits.
+
+use super::{Form, Instr, Reg, Tape, Workspace};
+use crate::eval::interp::{
+    IntervalDual, dual_binary, dual_powi, dual_unary, point_dual_binary, point_dual_powi,
+    point_dual_unary,
+};
+use crate::eval::{Grad, IntervalGrad};
+use crate::interval::Interval;
+use crate::ir::semantics::{
+    interval_binary, interval_unary, point_binary, point_powi, point_unary,
+};
+use crate::ir::{BinaryOp, UnaryOp};
+
+impl Tape {
+    /// f at `p`, the same bits as the reference interpreter: one pass over
+    /// the registers, one dispatch per instruction, the common ops inline
+    /// (the reference rules' `match` per op, a call each, costs more than
+    /// the op).
+    pub fn point(&self, p: [f64; 3], ws: &mut Workspace) -> f64 {
+        let m = &mut ws.points;
+        m.clear();
+        m.resize(self.registers, 0.0);
+        for instr in &self.code {
+            let r = |a: Reg| m[a as usize];
+            let (o, v) = match *instr {
+                Instr::Var(o, v) => (o, p[v.index()]),
+                Instr::Const(o, c) => (o, c),
+                Instr::Add(o, a, b) => (o, r(a) + r(b)),
+                Instr::Sub(o, a, b) => (o, r(a) - r(b)),
+                Instr::Mul(o, a, b) => (o, r(a) * r(b)),
+                Instr::Min(o, a, b) => (o, point_binary(BinaryOp::Min, r(a), r(b))),
+                Instr::Max(o, a, b) => (o, point_binary(BinaryOp::Max, r(a), r(b))),
+                Instr::Neg(o, a) => (o, -r(a)),
+                Instr::Square(o, a) => (o, r(a) * r(a)),
+                Instr::Sqrt(o, a) => (o, r(a).sqrt()),
+                Instr::Unary(o, op, a) => (o, point_unary(op, r(a))),
+                Instr::Binary(o, op, a, b) => (o, point_binary(op, r(a), r(b))),
+                Instr::Powi(o, a, k) => (o, point_powi(r(a), k)),
+            };
+            m[o as usize] = v;
+        }
+        m[self.root_reg()]
+    }
+
+    /// An interval containing f over `b`, the same bits as the reference
+    /// interpreter's (see [`Tape::point`]).
+    pub fn interval(&self, b: [Interval; 3], ws: &mut Workspace) -> Interval {
+        let m = &mut ws.intervals;
+        m.clear();
+        m.resize(self.registers, Interval::point(0.0));
+        for instr in &self.code {
+            let r = |a: Reg| m[a as usize];
+            let (o, v) = match *instr {
+                Instr::Var(o, v) => (o, b[v.index()]),
+                Instr::Const(o, c) => (o, Interval::point(c)),
+                Instr::Add(o, a, b) => (o, r(a).add(r(b))),
+                Instr::Sub(o, a, b) => (o, r(a).sub(r(b))),
+                Instr::Mul(o, a, b) => (o, r(a).mul(r(b))),
+                Instr::Min(o, a, b) => (o, r(a).min(r(b))),
+                Instr::Max(o, a, b) => (o, r(a).max(r(b))),
+                Instr::Neg(o, a) => (o, r(a).neg()),
+                Instr::Square(o, a) => (o, r(a).square()),
+                Instr::Sqrt(o, a) => (o, r(a).sqrt()),
+                Instr::Unary(o, op, a) => (o, interval_unary(op, r(a))),
+                Instr::Binary(o, op, a, b) => (o, interval_binary(op, r(a), r(b))),
+                Instr::Powi(o, a, k) => (o, r(a).powi(k)),
+            };
+            m[o as usize] = v;
+        }
+        m[self.root_reg()]
+    }
+
+    /// f and its gradient at `p`, the same bits as the reference
+    /// interpreter's [`crate::eval::Evaluator::point_grad`].
+    pub fn point_grad(&self, p: [f64; 3], ws: &mut Workspace) -> Grad {
+        let m = &mut ws.point_duals;
+        m.clear();
+        m.resize(self.registers, (0.0, [0.0; 3]));
+        for instr in &self.code {
+            let (o, d) = match instr.form() {
+                Form::Var(o, var) => {
+                    let mut d = [0.0; 3];
+                    d[var.index()] = 1.0;
+                    (o, (p[var.index()], d))
+                }
+                Form::Const(o, c) => (o, (c, [0.0; 3])),
+                Form::Unary(o, op, a) => (o, point_dual_unary(op, m[a as usize])),
+                Form::Binary(o, op, a, c) => {
+                    (o, point_dual_binary(op, m[a as usize], m[c as usize]))
+                }
+                Form::Powi(o, a, k) => (o, point_dual_powi(m[a as usize], k)),
+            };
+            m[o as usize] = d;
+        }
+        let (v, d) = m[self.root_reg()];
+        Grad { v, d }
+    }
+
+    /// F over `b` and its derivative along every direction in `v`, the
+    /// same bits as the reference interpreter's
+    /// [`crate::eval::Evaluator::interval_dir`].
+    pub fn interval_dir(
+        &self,
+        b: [Interval; 3],
+        v: [Interval; 3],
+        ws: &mut Workspace,
+    ) -> [Interval; 2] {
+        let (f, [d]) = self.duals(b, v.map(|vk| [vk]), &mut ws.dir);
+        [f, d]
+    }
+
+    /// F over `b` and its three partials, the same bits as the reference
+    /// interpreter's [`crate::eval::Evaluator::interval_grad`].
+    pub fn interval_grad(&self, b: [Interval; 3], ws: &mut Workspace) -> IntervalGrad {
+        let (o, z) = (Interval::point(1.0), Interval::point(0.0));
+        let (v, d) = self.duals(b, [[o, z, z], [z, o, z], [z, z, o]], &mut ws.grad);
+        IntervalGrad { v, d }
+    }
+
+    // Forward mode over the registers: each value with `S` partials, those
+    // of coordinate k starting as `seed[k]`.
+    fn duals<const S: usize>(
+        &self,
+        b: [Interval; 3],
+        seed: [[Interval; S]; 3],
+        m: &mut Vec<IntervalDual<S>>,
+    ) -> IntervalDual<S> {
+        let zero = Interval::point(0.0);
+        m.clear();
+        m.resize(self.registers, (zero, [zero; S]));
+        for instr in &self.code {
+            let (o, d) = match instr.form() {
+                Form::Var(o, var) => (o, (b[var.index()], seed[var.index()])),
+                Form::Const(o, c) => (o, (Interval::point(c), [zero; S])),
+                Form::Unary(o, op, a) => (o, dual_unary(op, m[a as usize])),
+                Form::Binary(o, op, a, c) => (o, dual_binary(op, m[a as usize], m[c as usize])),
+                Form::Powi(o, a, k) => (o, dual_powi(m[a as usize], k)),
+            };
+            m[o as usize] = d;
+        }
+        m[self.root_reg()]
+    }
+
+    /// `out[i] = f(xs[i], ys[i], zs[i])`, the same bits as the reference
+    /// interpreter.
+    pub fn point_batch(&self, [xs, ys, zs]: [&[f64]; 3], out: &mut [f64], ws: &mut Workspace) {
+        let n = out.len();
+        assert!(xs.len() == n && ys.len() == n && zs.len() == n);
+        let m = &mut ws.points;
+        m.clear();
+        m.resize(self.registers * n, 0.0);
+        for instr in &self.code {
+            let col = |r: Reg| r as usize * n;
+            match instr.form() {
+                Form::Var(o, v) => {
+                    let src = [xs, ys, zs][v.index()];
+                    m[col(o)..col(o) + n].copy_from_slice(src);
+                }
+                Form::Const(o, c) => m[col(o)..col(o) + n].fill(c),
+                Form::Unary(o, op, a) => {
+                    let (o, a) = (col(o), col(a));
+                    for i in 0..n {
+                        m[o + i] = point_unary(op, m[a + i]);
+                    }
+                }
+                Form::Binary(o, op, a, b) => point_binary_column(m, op, n, [o, a, b].map(col)),
+                Form::Powi(o, a, k) => {
+                    let (o, a) = (col(o), col(a));
+                    for i in 0..n {
+                        m[o + i] = point_powi(m[a + i], k);
+                    }
+                }
+            }
+        }
+        let r = self.root_reg() * n;
+        out.copy_from_slice(&m[r..r + n]);
+    }
+
+    /// `out[i]` contains f over `boxes[i]`, the same bits as the reference
+    /// interpreter's interval.
+    pub fn interval_batch(
+        &self,
+        boxes: &[[Interval; 3]],
+        out: &mut [Interval],
+        ws: &mut Workspace,
+    ) {
+        let n = out.len();
+        assert_eq!(boxes.len(), n);
+        let m = &mut ws.intervals;
+        m.clear();
+        m.resize(self.registers * n, Interval::point(0.0));
+        for instr in &self.code {
+            let col = |r: Reg| r as usize * n;
+            match instr.form() {
+                Form::Var(o, v) => {
+                    for (i, b) in boxes.iter().enumerate() {
+                        m[col(o) + i] = b[v.index()];
+                    }
+                }
+                Form::Const(o, c) => m[col(o)..col(o) + n].fill(Interval::point(c)),
+                Form::Unary(o, op, a) => {
+                    let (o, a) = (col(o), col(a));
+                    interval_unary_column(m, op, n, [o, a]);
+                }
+                Form::Binary(o, op, a, b) => {
+                    let (o, a, b) = (col(o), col(a), col(b));
+                    interval_binary_column(m, op, n, [o, a, b]);
+                }
+                Form::Powi(o, a, k) => {
+                    let (o, a) = (col(o), col(a));
+                    for i in 0..n {
+                        m[o + i] = m[a + i].powi(k);
+                    }
+                }
+            }
+        }
+        let r = self.root_reg() * n;
+        out.copy_from_slice(&m[r..r + n]);
+    }
+}
+
+/// One binary op over a column of points: the common ops as plain loops the
+/// compiler vectorises, the rest through the reference rule.
+fn point_binary_column(m: &mut [f64], op: BinaryOp, n: usize, [o, a, b]: [usize; 3]) {
+    match op {
+        BinaryOp::Add => (0..n).for_each(|i| m[o + i] = m[a + i] + m[b + i]),
+        BinaryOp::Sub => (0..n).for_each(|i| m[o + i] = m[a + i] - m[b + i]),
+        BinaryOp::Mul => (0..n).for_each(|i| m[o + i] = m[a + i] * m[b + i]),
+        _ => (0..n).for_each(|i| m[o + i] = point_binary(op, m[a + i], m[b + i])),
+    }
+}
+
+/// One unary op over a column of intervals, one loop per common op.
+fn interval_unary_column(m: &mut [Interval], op: UnaryOp, n: usize, [o, a]: [usize; 2]) {
+    match op {
+        UnaryOp::Neg => (0..n).for_each(|i| m[o + i] = m[a + i].neg()),
+        UnaryOp::Square => (0..n).for_each(|i| m[o + i] = m[a + i].square()),
+        UnaryOp::Sqrt => (0..n).for_each(|i| m[o + i] = m[a + i].sqrt()),
+        _ => (0..n).for_each(|i| m[o + i] = interval_unary(op, m[a + i])),
+    }
+}
+
+/// One binary op over a column of intervals, one loop per common op.
+fn interval_binary_column(m: &mut [Interval], op: BinaryOp, n: usize, [o, a, b]: [usize; 3]) {
+    match op {
+        BinaryOp::Add => (0..n).for_each(|i| m[o + i] = m[a + i].add(m[b + i])),
+        BinaryOp::Sub => (0..n).for_each(|i| m[o + i] = m[a + i].sub(m[b + i])),
+        BinaryOp::Mul => (0..n).for_each(|i| m[o + i] = m[a + i].mul(m[b + i])),
+        BinaryOp::Min => (0..n).for_each(|i| m[o + i] = m[a + i].min(m[b + i])),
+        BinaryOp::Max => (0..n).for_each(|i| m[o + i] = m[a + i].max(m[b + i])),
+        _ => (0..n).for_each(|i| m[o + i] = interval_binary(op, m[a + i], m[b + i])),
+    }
+}

@@ -1,0 +1,197 @@
+//! Tapes against the reference interpreter: every run and batch gives its
+//! bits, and pruned tapes keep them on their boxes.
+
+use super::*;
+use crate::eval::Evaluator;
+use crate::eval::interp::Interpreter;
+use crate::ir::passes::simplify;
+use crate::ir::random::{Rng, random_function};
+
+fn same(a: f64, b: f64) -> bool {
+    a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
+}
+
+fn same_iv(a: Interval, b: Interval) -> bool {
+    (a.is_empty() && b.is_empty()) || (same(a.lo, b.lo) && same(a.hi, b.hi))
+}
+
+fn random_box(rng: &mut Rng, s: f64) -> [Interval; 3] {
+    std::array::from_fn(|_| {
+        let (a, b) = (rng.range(-s, s), rng.range(-s, s));
+        Interval::new(a.min(b), a.max(b))
+    })
+}
+
+#[test]
+fn batches_give_the_interpreters_bits() {
+    let mut rng = Rng::new(7);
+    let mut ws = Workspace::default();
+    for seed in 0..300 {
+        let f = random_function(seed, 8);
+        let tape = Tape::new(&f);
+        crate::ir::validate::validate(tape.function()).unwrap();
+        let it = Interpreter::new(f);
+        let pts: Vec<[f64; 3]> = (0..17)
+            .map(|_| std::array::from_fn(|_| rng.range(-3.0, 3.0)))
+            .collect();
+        let cols: [Vec<f64>; 3] = std::array::from_fn(|c| pts.iter().map(|p| p[c]).collect());
+        let mut out = vec![0.0; pts.len()];
+        tape.point_batch([&cols[0], &cols[1], &cols[2]], &mut out, &mut ws);
+        for (p, v) in pts.iter().zip(&out) {
+            assert!(same(*v, it.point(*p)), "seed {seed} at {p:?}");
+        }
+        let boxes: Vec<_> = (0..9).map(|_| random_box(&mut rng, 3.0)).collect();
+        let mut iv = vec![Interval::point(0.0); boxes.len()];
+        tape.interval_batch(&boxes, &mut iv, &mut ws);
+        for (b, v) in boxes.iter().zip(&iv) {
+            assert!(same_iv(*v, it.interval(*b)), "seed {seed} over {b:?}");
+        }
+    }
+}
+
+#[test]
+fn scalar_runs_and_directions_give_the_interpreters_bits() {
+    let mut rng = Rng::new(17);
+    let mut ws = Workspace::default();
+    for seed in 0..300 {
+        let f = random_function(seed, 10);
+        let tape = Tape::new(&f);
+        let it = Interpreter::new(f);
+        for _ in 0..8 {
+            let p: [f64; 3] = std::array::from_fn(|_| rng.range(-3.0, 3.0));
+            assert!(
+                same(tape.point(p, &mut ws), it.point(p)),
+                "seed {seed} at {p:?}"
+            );
+            let b = random_box(&mut rng, 3.0);
+            assert!(
+                same_iv(tape.interval(b, &mut ws), it.interval(b)),
+                "seed {seed} over {b:?}"
+            );
+            let v = random_box(&mut rng, 2.0);
+            let [tv, td] = tape.interval_dir(b, v, &mut ws);
+            let [iv, id] = it.interval_dir(b, v);
+            assert!(
+                same_iv(tv, iv) && same_iv(td, id),
+                "seed {seed} over {b:?} along {v:?}"
+            );
+        }
+    }
+}
+
+/// A union of `n` spheres along x: a min chain, balanced by simplify.
+fn spheres(n: usize) -> Function {
+    let mut b = crate::ir::Builder::new();
+    let x = b.var(Var::X);
+    let y = b.var(Var::Y);
+    let z = b.var(Var::Z);
+    let yz = {
+        let y2 = b.unary(UnaryOp::Square, y);
+        let z2 = b.unary(UnaryOp::Square, z);
+        b.binary(BinaryOp::Add, y2, z2)
+    };
+    let mut acc = None;
+    for i in 0..n {
+        let c = b.constant(i as f64);
+        let dx = b.binary(BinaryOp::Sub, x, c);
+        let dx2 = b.unary(UnaryOp::Square, dx);
+        let r2 = b.binary(BinaryOp::Add, dx2, yz);
+        let r = b.unary(UnaryOp::Sqrt, r2);
+        let half = b.constant(0.5);
+        let s = b.binary(BinaryOp::Sub, r, half);
+        acc = Some(match acc {
+            None => s,
+            Some(a) => b.binary(BinaryOp::Min, a, s),
+        });
+    }
+    simplify(&b.finish(acc.unwrap()))
+}
+
+#[test]
+fn pruning_keeps_the_bits_inside_and_nests() {
+    let f = spheres(200);
+    let whole = Tape::new(&f);
+    assert!(whole.registers() < 40, "{} registers", whole.registers());
+    let mut ws = Workspace::default();
+    let outer = [
+        Interval::new(40.2, 47.8),
+        Interval::new(-1.0, 1.0),
+        Interval::new(-1.0, 1.0),
+    ];
+    let p1 = whole
+        .prune(outer, &mut ws)
+        .expect("a small box decides most mins");
+    assert!(
+        p1.tape.len() * 5 < whole.len(),
+        "{} of {}",
+        p1.tape.len(),
+        whole.len()
+    );
+    crate::ir::validate::validate(p1.tape.function()).unwrap();
+    let inner = [
+        Interval::new(44.6, 45.3),
+        Interval::new(-0.2, 0.3),
+        Interval::new(0.0, 0.1),
+    ];
+    let p2 = p1
+        .tape
+        .prune(inner, &mut ws)
+        .expect("nested pruning decides more");
+    assert!(p2.tape.len() < p1.tape.len());
+    let direct = crate::ir::prune::prune(&f, outer).unwrap();
+    assert_eq!(direct.decided, p1.decided);
+    let it = Interpreter::new(f.clone());
+    let mut rng = Rng::new(3);
+    for (tape, bx) in [(&p1.tape, outer), (&p2.tape, inner)] {
+        let pts: Vec<[f64; 3]> = (0..64)
+            .map(|_| std::array::from_fn(|c| rng.range(bx[c].lo, bx[c].hi)))
+            .collect();
+        let cols: [Vec<f64>; 3] = std::array::from_fn(|c| pts.iter().map(|p| p[c]).collect());
+        let mut out = vec![0.0; pts.len()];
+        tape.point_batch([&cols[0], &cols[1], &cols[2]], &mut out, &mut ws);
+        for (p, v) in pts.iter().zip(&out) {
+            assert!(same(*v, it.point(*p)), "at {p:?}");
+        }
+    }
+}
+
+#[test]
+fn a_size_limit_refuses_a_longer_child_and_keeps_a_shorter_one() {
+    let whole = Tape::new(&spheres(50));
+    let mut ws = Workspace::default();
+    let b = [
+        Interval::new(20.2, 22.8),
+        Interval::new(-1.0, 1.0),
+        Interval::new(-1.0, 1.0),
+    ];
+    let child = whole.prune(b, &mut ws).expect("prunes").tape;
+    let n = child.len();
+    assert!(whole.prune_to_at_most(b, n - 1, &mut ws).is_none());
+    let same = whole.prune_to_at_most(b, n, &mut ws).expect("fits");
+    assert_eq!(same.tape, child);
+}
+
+#[test]
+fn pruned_random_functions_keep_their_bits_in_the_box() {
+    let mut rng = Rng::new(11);
+    let mut ws = Workspace::default();
+    let mut pruned = 0;
+    for seed in 0..400 {
+        let f = random_function(seed, 9);
+        let tape = Tape::new(&f);
+        let bx = random_box(&mut rng, 2.0);
+        let Some(p) = tape.prune(bx, &mut ws) else {
+            continue;
+        };
+        pruned += 1;
+        let it = Interpreter::new(f);
+        for _ in 0..16 {
+            let q: [f64; 3] = std::array::from_fn(|c| rng.range(bx[c].lo, bx[c].hi));
+            let mut out = [0.0];
+            p.tape
+                .point_batch([&[q[0]], &[q[1]], &[q[2]]], &mut out, &mut ws);
+            assert!(same(out[0], it.point(q)), "seed {seed} at {q:?}");
+        }
+    }
+    assert!(pruned > 20, "only {pruned} random functions pruned");
+}
