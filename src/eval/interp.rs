@@ -223,12 +223,12 @@ pub(crate) fn dual_unary<const S: usize>(op: UnaryOp, (a, x): IntervalDual<S>) -
         UnaryOp::Neg => (a.neg(), x.map(Interval::neg)),
         UnaryOp::Square => {
             let fp = a.add(a);
-            (a.square(), x.map(|x| fp.mul(x)))
+            (a.square(), x.map(|x| chain(fp, x)))
         }
         UnaryOp::Sqrt => {
             let v = a.sqrt();
             let fp = Interval::point(0.5).div(v);
-            (v, x.map(|x| fp.mul(x)))
+            (v, x.map(|x| chain(fp, x)))
         }
         _ => {
             let (v, d) = grad_unary(&mut Reference, op, (a, partials(x)));
@@ -250,15 +250,9 @@ pub(crate) fn dual_binary<const S: usize>(
     match op {
         BinaryOp::Add => (a.add(b), zip(&|x, y| x.add(y))),
         BinaryOp::Sub => (a.sub(b), zip(&|x, y| x.sub(y))),
-        BinaryOp::Mul => (a.mul(b), zip(&|x, y| b.mul(x).add(a.mul(y)))),
-        BinaryOp::Min => {
-            let (l, r) = (a.hi < b.lo, b.hi <= a.lo);
-            (a.min(b), zip(&|x, y| pick_operand(a, b, l, r, x, y)))
-        }
-        BinaryOp::Max => {
-            let (l, r) = (a.lo > b.hi, b.lo >= a.hi);
-            (a.max(b), zip(&|x, y| pick_operand(a, b, l, r, x, y)))
-        }
+        BinaryOp::Mul => (a.mul(b), zip(&|x, y| chain(b, x).add(chain(a, y)))),
+        BinaryOp::Min => (a.min(b), zip(&|x, y| Reference.min_grad(a, b, x, y))),
+        BinaryOp::Max => (a.max(b), zip(&|x, y| Reference.max_grad(a, b, x, y))),
         _ => {
             let (v, d) = grad_binary(&mut Reference, op, (a, partials(x)), (b, partials(y)));
             (v, first(d))
@@ -272,10 +266,13 @@ pub(crate) fn dual_powi<const S: usize>((a, x): IntervalDual<S>, n: i32) -> Inte
     (v, first(d))
 }
 
-/// `f'(a)·x` by the reference rule (a partial known to be 0 stays +0).
+/// `f'(a)·x` by the reference rule ([`Arith::chain`]).
 #[inline]
-fn point_chain(fp: f64, x: f64) -> f64 {
-    if x == 0.0 { 0.0 } else { fp * x }
+fn chain<N: Copy>(fp: N, x: N) -> N
+where
+    Reference: Arith<N>,
+{
+    Reference.chain(fp, x)
 }
 
 /// `op(a)` and its three partials by the reference rules: the bits of the
@@ -287,12 +284,12 @@ pub(crate) fn point_dual_unary(op: UnaryOp, (a, x): (f64, [f64; 3])) -> (f64, [f
         UnaryOp::Neg => (-a, x.map(|x| -x)),
         UnaryOp::Square => {
             let fp = a + a;
-            (a * a, x.map(|x| point_chain(fp, x)))
+            (a * a, x.map(|x| chain(fp, x)))
         }
         UnaryOp::Sqrt => {
             let v = a.sqrt();
             let fp = 0.5 / v;
-            (v, x.map(|x| point_chain(fp, x)))
+            (v, x.map(|x| chain(fp, x)))
         }
         _ => {
             let (v, d) = grad_unary(&mut Reference, op, (a, x.map(Some)));
@@ -309,21 +306,18 @@ pub(crate) fn point_dual_binary(
     (b, y): (f64, [f64; 3]),
 ) -> (f64, [f64; 3]) {
     let zip = |f: &dyn Fn(f64, f64) -> f64| -> [f64; 3] { std::array::from_fn(|k| f(x[k], y[k])) };
-    let pick = |first: bool| -> [f64; 3] {
-        if a.is_nan() || b.is_nan() {
-            [f64::NAN; 3]
-        } else if first {
-            x
-        } else {
-            y
-        }
-    };
     match op {
         BinaryOp::Add => (a + b, zip(&|x, y| x + y)),
         BinaryOp::Sub => (a - b, zip(&|x, y| x - y)),
-        BinaryOp::Mul => (a * b, zip(&|x, y| point_chain(b, x) + point_chain(a, y))),
-        BinaryOp::Min => (point_binary(op, a, b), pick(a < b)),
-        BinaryOp::Max => (point_binary(op, a, b), pick(a > b)),
+        BinaryOp::Mul => (a * b, zip(&|x, y| chain(b, x) + chain(a, y))),
+        BinaryOp::Min => (
+            point_binary(op, a, b),
+            zip(&|x, y| Reference.min_grad(a, b, x, y)),
+        ),
+        BinaryOp::Max => (
+            point_binary(op, a, b),
+            zip(&|x, y| Reference.max_grad(a, b, x, y)),
+        ),
         _ => {
             let (v, d) = grad_binary(&mut Reference, op, (a, x.map(Some)), (b, y.map(Some)));
             (v, d.map(|d| d.unwrap_or(0.0)))

@@ -130,11 +130,7 @@ impl Regional {
     /// The evaluator for a box: the smallest region's if the box lies in
     /// the region, else the parent.
     fn for_box(&self, b: &IBox) -> &dyn Evaluator {
-        if box_within(b, &self.region) {
-            self.smallest_holding(b).answer.as_ref()
-        } else {
-            self.parent.as_ref()
-        }
+        self.answer_for(b).unwrap_or(self.parent.as_ref())
     }
 
     /// What answers for every box in `hull` at once, if the hull lies in
