@@ -200,6 +200,10 @@ fn bench_eval(args: &EvalArgs) -> Result<(), CliError> {
         });
         let tape = TapeEvaluator::of_function(&f);
         let tape_pts = single_points(&tape);
+        let tape_batch_pts = rate(min, BATCH, || {
+            tape.point_batch(&xs, &ys, &zs, &mut out);
+            black_box(&out);
+        });
         let tape_boxes = single_boxes(&tape);
         let tape_batch_boxes = rate(min, BATCH, || {
             tape.interval_batch(&boxes, &mut iout);
@@ -214,11 +218,12 @@ fn bench_eval(args: &EvalArgs) -> Result<(), CliError> {
             })
         };
         tape_rows.push(format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             file.display(),
             f.len(),
             si(interp_pts),
             si(tape_pts),
+            si(tape_batch_pts),
             si(interp_boxes),
             si(tape_boxes),
             si(tape_batch_boxes),
@@ -242,9 +247,9 @@ fn bench_eval(args: &EvalArgs) -> Result<(), CliError> {
     }
     println!();
     println!(
-        "| scene | ops | interp points/s | tape points/s | interp boxes/s | tape boxes/s | tape batch boxes/s | interp directional/s | tape directional/s |"
+        "| scene | ops | interp points/s | tape points/s | tape batch points/s | interp boxes/s | tape boxes/s | tape batch boxes/s | interp directional/s | tape directional/s |"
     );
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for row in tape_rows {
         println!("{row}");
     }

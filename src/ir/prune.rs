@@ -161,6 +161,7 @@ pub fn powi_facts(n: i32, (va, fa): (Interval, Facts), value: Interval) -> Facts
 /// a box where its operands have these intervals and facts, if one is
 /// proven to (the other must be proven defined: a NaN would win; and the
 /// winner's point values must lie in its interval).
+#[inline]
 pub fn decided_operand(op: BinaryOp, x: (Interval, Facts), y: (Interval, Facts)) -> Option<usize> {
     let (a, c) = (x.0, y.0);
     let (x_wins, y_wins) = match op {

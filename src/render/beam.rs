@@ -216,29 +216,63 @@ fn beam_tests(
 /// batches (`flat_leaf`) rather than split further.
 const FLAT_LEAF_PIXELS: u32 = 64;
 
-// A small block of a flat scene (f constant along every ray): each pixel
-// is settled from one batch of point values at the rays' starts (f < 0:
-// the ray starts inside, as `ray::starts_inside` decides) and one batch of
-// intervals over the rays' whole ranges (every object proven positive or
-// undefined: no hit, as the first piece of `trace_ray` decides, a flat
-// scene's sweep starting from one piece); only the other pixels get single
-// rays. The batches run each object's tape once over the block
-// (`Evaluator::point_batch`), and give single rays' decisions.
+// A small block of a flat scene (f constant along every ray), settled
+// with batches rather than single rays. A pixel's single ray decides from
+// a point value at its start (f < 0: it starts inside, as
+// `ray::starts_inside` decides) and then an interval over its whole range
+// (every object proven positive or undefined: no hit, as the first piece
+// of `trace_ray` decides, a flat scene's sweep starting from one piece).
+// Here the block's cells of `FLAT_CELL`² pixels first take one interval
+// over the hull of their pixels' ray boxes: where every object is proven
+// positive or undefined there, it is so on each pixel's own box too
+// (interval arithmetic is inclusion-isotone, and a pixel's start value
+// lies in its box's interval), so those pixels are settled empty without
+// a value of their own. The other pixels take the single ray's two tests
+// in batches, and only those both leave open get single rays. Each batch
+// runs each object's tape once (`Evaluator::point_batch`,
+// `Evaluator::interval_batch`).
 fn flat_leaf(tr: &Tracer<'_>, tile: &mut TileRays, b: Rect, live: &[u32], st: &mut TileState) {
-    let mut px: Vec<(usize, f64, f64)> = Vec::with_capacity(FLAT_LEAF_PIXELS as usize);
+    let cols = (b.x1 - b.x0).div_ceil(FLAT_CELL);
+    let rows = (b.y1 - b.y0).div_ceil(FLAT_CELL);
+    let mut cells: Vec<Option<IBox>> = vec![None; (cols * rows) as usize];
+    // (pixel, its clip range, its ray box, its cell)
+    let mut px: Vec<(usize, (f64, f64), IBox, usize)> =
+        Vec::with_capacity(FLAT_LEAF_PIXELS as usize);
     for (i, j) in b.pixels() {
         let k = tile.idx(i, j);
         tile.hits[k] = None;
         tile.class[k] = Class::Ray;
         if let Some((t0, t1)) = tile.slabs[k] {
-            px.push((k, t0, t1));
+            let r = &tile.rays[k];
+            let rb = ray_box(r.o, r.d, Interval::new(t0, t1));
+            let c = ((j - b.y0) / FLAT_CELL * cols + (i - b.x0) / FLAT_CELL) as usize;
+            cells[c] = Some(cells[c].map_or(rb, |h| box_hull(h, rb)));
+            px.push((k, (t0, t1), rb, c));
         }
     }
-    let n = px.len();
-    if n == 0 || live.is_empty() {
+    if px.is_empty() || live.is_empty() {
         return;
     }
-    let starts: Vec<[f64; 3]> = px.iter().map(|&(k, t0, _)| tile.rays[k].at(t0)).collect();
+    let hulls: Vec<(usize, IBox)> = (cells.iter().enumerate())
+        .filter_map(|(c, h)| Some((c, (*h)?)))
+        .collect();
+    let boxes: Vec<IBox> = hulls.iter().map(|&(_, h)| h).collect();
+    let clear = clear_boxes(tr, &boxes, live, st);
+    let mut open = vec![true; cells.len()];
+    for (&(c, _), clear) in hulls.iter().zip(clear) {
+        open[c] = !clear;
+    }
+    let before = px.len();
+    px.retain(|p| open[p.3]);
+    st.stats.pixels_batched += (before - px.len()) as u64;
+    let n = px.len();
+    if n == 0 {
+        return;
+    }
+    let starts: Vec<[f64; 3]> = px
+        .iter()
+        .map(|&(k, (t0, _), _, _)| tile.rays[k].at(t0))
+        .collect();
     let coords: [Vec<f64>; 3] = std::array::from_fn(|c| starts.iter().map(|p| p[c]).collect());
     let mut best = vec![(f64::INFINITY, live[0] as usize); n];
     let mut v = vec![0.0; n];
@@ -252,7 +286,7 @@ fn flat_leaf(tr: &Tracer<'_>, tile: &mut TileRays, b: Rect, live: &[u32], st: &m
     }
     st.stats.point_evals += (n * live.len()) as u64;
     let mut rest = Vec::with_capacity(n);
-    for (i, &(k, t0, _)) in px.iter().enumerate() {
+    for (i, &(k, (t0, _), _, _)) in px.iter().enumerate() {
         if best[i].0 < 0.0 {
             st.stats.pixels_batched += 1;
             tile.hits[k] = Some(Hit {
@@ -268,32 +302,35 @@ fn flat_leaf(tr: &Tracer<'_>, tile: &mut TileRays, b: Rect, live: &[u32], st: &m
     if rest.is_empty() {
         return;
     }
-    let boxes: Vec<IBox> = rest
-        .iter()
-        .map(|&i| {
-            let (k, t0, t1) = px[i];
-            let r = &tile.rays[k];
-            ray_box(r.o, r.d, Interval::new(t0, t1))
-        })
-        .collect();
-    let mut clear = vec![true; rest.len()];
-    let mut f = vec![Interval::point(0.0); rest.len()];
-    for &o in live {
-        tr.evals[o as usize].interval_batch(&boxes, &mut f);
-        for (c, fi) in clear.iter_mut().zip(&f) {
-            *c &= fi.is_empty() || fi.lo > 0.0;
-        }
-    }
-    st.stats.interval_evals += (rest.len() * live.len()) as u64;
+    let boxes: Vec<IBox> = rest.iter().map(|&i| px[i].2).collect();
+    let clear = clear_boxes(tr, &boxes, live, st);
     for (&i, clear) in rest.iter().zip(clear) {
         if clear {
             st.stats.pixels_batched += 1;
         } else {
-            let (k, t0, t1) = px[i];
+            let (k, (t0, t1), _, _) = px[i];
             let ray = tile.rays[k];
             tile.hits[k] = trace_ray(tr, &ray, t0, t1, live, st);
         }
     }
+}
+
+/// Side, in pixels, of the cells a flat leaf first tests whole.
+const FLAT_CELL: u32 = 2;
+
+// Whether every live object is proven positive or undefined over each of
+// `boxes`, one batch per object.
+fn clear_boxes(tr: &Tracer<'_>, boxes: &[IBox], live: &[u32], st: &mut TileState) -> Vec<bool> {
+    let mut clear = vec![true; boxes.len()];
+    let mut f = vec![Interval::point(0.0); boxes.len()];
+    for &o in live {
+        tr.evals[o as usize].interval_batch(boxes, &mut f);
+        for (c, fi) in clear.iter_mut().zip(&f) {
+            *c &= fi.is_empty() || fi.lo > 0.0;
+        }
+    }
+    st.stats.interval_evals += (boxes.len() * live.len()) as u64;
+    clear
 }
 
 // Width of the window a split block prunes its functions to, in units of

@@ -153,6 +153,8 @@ pub struct Tape {
 #[derive(Clone, Default, Debug)]
 pub struct Workspace {
     points: Vec<f64>,
+    // One column of a point batch, before it is copied to its register.
+    point_column: Vec<f64>,
     intervals: Vec<Interval>,
     point_duals: Vec<(f64, [f64; 3])>,
     dir: Vec<IntervalDual<1>>,
@@ -270,36 +272,42 @@ impl Tape {
         alias.clear();
         alias.extend(0..n);
         let mut decided = 0;
+        // One dispatch per instruction: each common op's arm calls the
+        // shared rules with its op fixed, which inlining specialises (a
+        // dispatch on the form, then on the op inside each rule, costs
+        // several mispredicted branches per op).
         for (k, instr) in self.code.iter().enumerate() {
             let at = |r: Reg| (regs[r as usize], fact[r as usize]);
-            let (out, v, f) = match instr.form() {
-                Form::Var(o, var) => {
+            let (out, v, f, pick) = match *instr {
+                Instr::Var(o, var) => {
                     let v = b[var.index()];
-                    (o, v, var_facts(v))
+                    (o, v, var_facts(v), None)
                 }
-                Form::Const(o, c) => (o, Interval::point(c), const_facts(c)),
-                Form::Unary(o, u, a) => {
-                    let a = at(a);
-                    let v = interval_unary_inline(u, a.0);
-                    (o, v, unary_facts(u, a, v))
+                Instr::Const(o, c) => (o, Interval::point(c), const_facts(c), None),
+                Instr::Add(o, x, y) => binary(o, BinaryOp::Add, at(x), at(y), Interval::add),
+                Instr::Sub(o, x, y) => binary(o, BinaryOp::Sub, at(x), at(y), Interval::sub),
+                Instr::Mul(o, x, y) => binary(o, BinaryOp::Mul, at(x), at(y), Interval::mul),
+                Instr::Min(o, x, y) => binary(o, BinaryOp::Min, at(x), at(y), Interval::min),
+                Instr::Max(o, x, y) => binary(o, BinaryOp::Max, at(x), at(y), Interval::max),
+                Instr::Binary(o, op, x, y) => {
+                    binary(o, op, at(x), at(y), |p, q| interval_binary_inline(op, p, q))
                 }
-                Form::Binary(o, op, x, y) => {
-                    let (x, y) = (at(x), at(y));
-                    if let Some(w) = decided_operand(op, x, y)
-                        && let Op::Binary(_, xa, ya) = ops[k]
-                    {
-                        alias[k] = alias[[xa, ya][w].index()];
-                        decided += 1;
-                    }
-                    let v = interval_binary_inline(op, x.0, y.0);
-                    (o, v, binary_facts(op, x, y, v))
-                }
-                Form::Powi(o, a, p) => {
-                    let a = at(a);
-                    let v = a.0.powi(p);
-                    (o, v, powi_facts(p, a, v))
+                Instr::Neg(o, x) => unary(o, UnaryOp::Neg, at(x), Interval::neg),
+                Instr::Square(o, x) => unary(o, UnaryOp::Square, at(x), Interval::square),
+                Instr::Sqrt(o, x) => unary(o, UnaryOp::Sqrt, at(x), Interval::sqrt),
+                Instr::Unary(o, u, x) => unary(o, u, at(x), |p| interval_unary_inline(u, p)),
+                Instr::Powi(o, x, p) => {
+                    let x = at(x);
+                    let v = x.0.powi(p);
+                    (o, v, powi_facts(p, x, v), None)
                 }
             };
+            if let Some(w) = pick
+                && let Op::Binary(_, xa, ya) = ops[k]
+            {
+                alias[k] = alias[[xa, ya][w].index()];
+                decided += 1;
+            }
             regs[out as usize] = v;
             fact[out as usize] = f;
         }
@@ -458,6 +466,39 @@ fn depth_first(f: &Function) -> Vec<usize> {
         }
     }
     order
+}
+
+/// One step of pruning's forward pass over `u(x)` written to `o`: its
+/// interval (by `value`), its facts, and no decision.
+#[inline(always)]
+fn unary(
+    o: Reg,
+    u: UnaryOp,
+    x: (Interval, Facts),
+    value: impl Fn(Interval) -> Interval,
+) -> (Reg, Interval, Facts, Option<usize>) {
+    let v = value(x.0);
+    (o, v, unary_facts(u, x, v), None)
+}
+
+/// One step of pruning's forward pass over `op(x, y)` written to `o`: its
+/// interval (by `value`), its facts, and the operand a `min` or `max`
+/// always picks on the box, if proven.
+#[inline(always)]
+fn binary(
+    o: Reg,
+    op: BinaryOp,
+    x: (Interval, Facts),
+    y: (Interval, Facts),
+    value: impl Fn(Interval, Interval) -> Interval,
+) -> (Reg, Interval, Facts, Option<usize>) {
+    let pick = if matches!(op, BinaryOp::Min | BinaryOp::Max) {
+        decided_operand(op, x, y)
+    } else {
+        None
+    };
+    let v = value(x.0, y.0);
+    (o, v, binary_facts(op, x, y, v), pick)
 }
 
 /// [`interval_unary`] with the ops of distance fields and CSG inline.

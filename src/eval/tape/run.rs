@@ -8,7 +8,7 @@ use crate::eval::interp::{
     point_dual_unary,
 };
 use crate::eval::{Grad, IntervalGrad};
-use crate::interval::Interval;
+use crate::interval::{Interval, max_nan, min_nan};
 use crate::ir::semantics::{
     interval_binary, interval_unary, point_binary, point_powi, point_unary,
 };
@@ -152,28 +152,38 @@ impl Tape {
         let m = &mut ws.points;
         m.clear();
         m.resize(self.registers * n, 0.0);
+        // Each op writes a scratch column, then copies it into its
+        // register: the loops then read and write disjoint slices, which
+        // the compiler vectorises, whereas an output register that reuses
+        // an operand's would alias it.
+        let col = &mut ws.point_column;
+        col.clear();
+        col.resize(n, 0.0);
         for instr in &self.code {
-            let col = |r: Reg| r as usize * n;
-            match instr.form() {
+            let at = |r: Reg| r as usize * n;
+            let o = match instr.form() {
                 Form::Var(o, v) => {
-                    let src = [xs, ys, zs][v.index()];
-                    m[col(o)..col(o) + n].copy_from_slice(src);
+                    col.copy_from_slice([xs, ys, zs][v.index()]);
+                    o
                 }
-                Form::Const(o, c) => m[col(o)..col(o) + n].fill(c),
+                Form::Const(o, c) => {
+                    col.fill(c);
+                    o
+                }
                 Form::Unary(o, op, a) => {
-                    let (o, a) = (col(o), col(a));
-                    for i in 0..n {
-                        m[o + i] = point_unary(op, m[a + i]);
-                    }
+                    point_unary_column(col, op, &m[at(a)..at(a) + n]);
+                    o
                 }
-                Form::Binary(o, op, a, b) => point_binary_column(m, op, n, [o, a, b].map(col)),
+                Form::Binary(o, op, a, b) => {
+                    point_binary_column(col, op, &m[at(a)..at(a) + n], &m[at(b)..at(b) + n]);
+                    o
+                }
                 Form::Powi(o, a, k) => {
-                    let (o, a) = (col(o), col(a));
-                    for i in 0..n {
-                        m[o + i] = point_powi(m[a + i], k);
-                    }
+                    map1(col, &m[at(a)..at(a) + n], |x| point_powi(x, k));
+                    o
                 }
-            }
+            };
+            m[at(o)..at(o) + n].copy_from_slice(col);
         }
         let r = self.root_reg() * n;
         out.copy_from_slice(&m[r..r + n]);
@@ -222,14 +232,46 @@ impl Tape {
     }
 }
 
-/// One binary op over a column of points: the common ops as plain loops the
-/// compiler vectorises, the rest through the reference rule.
-fn point_binary_column(m: &mut [f64], op: BinaryOp, n: usize, [o, a, b]: [usize; 3]) {
+/// `out[i] = f(a[i])` over equal-length columns, a loop the compiler
+/// vectorises where `f` is plain arithmetic.
+#[inline(always)]
+fn map1(out: &mut [f64], a: &[f64], f: impl Fn(f64) -> f64) {
+    for (o, &x) in out.iter_mut().zip(a) {
+        *o = f(x);
+    }
+}
+
+/// `out[i] = f(a[i], b[i])`, as [`map1`].
+#[inline(always)]
+fn map2(out: &mut [f64], a: &[f64], b: &[f64], f: impl Fn(f64, f64) -> f64) {
+    for ((o, &x), &y) in out.iter_mut().zip(a).zip(b) {
+        *o = f(x, y);
+    }
+}
+
+/// One unary op over a column of points: the common ops as plain loops,
+/// the rest through the reference rule.
+fn point_unary_column(out: &mut [f64], op: UnaryOp, a: &[f64]) {
     match op {
-        BinaryOp::Add => (0..n).for_each(|i| m[o + i] = m[a + i] + m[b + i]),
-        BinaryOp::Sub => (0..n).for_each(|i| m[o + i] = m[a + i] - m[b + i]),
-        BinaryOp::Mul => (0..n).for_each(|i| m[o + i] = m[a + i] * m[b + i]),
-        _ => (0..n).for_each(|i| m[o + i] = point_binary(op, m[a + i], m[b + i])),
+        UnaryOp::Neg => map1(out, a, |x| -x),
+        UnaryOp::Square => map1(out, a, |x| x * x),
+        UnaryOp::Sqrt => map1(out, a, f64::sqrt),
+        UnaryOp::Abs => map1(out, a, f64::abs),
+        _ => map1(out, a, |x| point_unary(op, x)),
+    }
+}
+
+/// One binary op over a column of points: the common ops as plain loops
+/// (min and max are the reference `min_nan` and `max_nan`, branch-free
+/// selects once inlined), the rest through the reference rule.
+fn point_binary_column(out: &mut [f64], op: BinaryOp, a: &[f64], b: &[f64]) {
+    match op {
+        BinaryOp::Add => map2(out, a, b, |x, y| x + y),
+        BinaryOp::Sub => map2(out, a, b, |x, y| x - y),
+        BinaryOp::Mul => map2(out, a, b, |x, y| x * y),
+        BinaryOp::Min => map2(out, a, b, min_nan),
+        BinaryOp::Max => map2(out, a, b, max_nan),
+        _ => map2(out, a, b, |x, y| point_binary(op, x, y)),
     }
 }
 
