@@ -27,7 +27,7 @@
 
 use super::camera::{CornerRays, PixelRay};
 use super::probe::{self, Form, Rect, Sweep};
-use super::ray::{scene_point, trace_ray};
+use super::ray::{scene_points, trace_ray};
 use super::refine::{Bracket, refine_batch};
 use super::stats::RenderStats;
 use super::tracer::{TileState, Tracer};
@@ -273,18 +273,7 @@ fn flat_leaf(tr: &Tracer<'_>, tile: &mut TileRays, b: Rect, live: &[u32], st: &m
         .iter()
         .map(|&(k, (t0, _), _, _)| tile.rays[k].at(t0))
         .collect();
-    let coords: [Vec<f64>; 3] = std::array::from_fn(|c| starts.iter().map(|p| p[c]).collect());
-    let mut best = vec![(f64::INFINITY, live[0] as usize); n];
-    let mut v = vec![0.0; n];
-    for &o in live {
-        tr.evals[o as usize].point_batch(&coords[0], &coords[1], &coords[2], &mut v);
-        for (b, &vi) in best.iter_mut().zip(&v) {
-            if vi < b.0 {
-                *b = (vi, o as usize);
-            }
-        }
-    }
-    st.stats.point_evals += (n * live.len()) as u64;
+    let best = scene_points(tr, live, &starts, &mut st.stats);
     let mut rest = Vec::with_capacity(n);
     for (i, &(k, (t0, _), _, _)) in px.iter().enumerate() {
         if best[i].0 < 0.0 {
@@ -442,20 +431,21 @@ fn all_start_inside(
     for (i, j) in b.pixels() {
         let k = tile.idx(i, j);
         if let Some((pt0, _)) = tile.slabs[k] {
-            let (v, obj) = scene_point(tr, live, tile.rays[k].at(pt0), st);
-            // NaN (undefined) is not inside.
-            if v.is_nan() || v >= 0.0 {
-                return false;
-            }
-            starts.push((k, pt0, obj));
+            starts.push((k, pt0));
         }
+    }
+    let points: Vec<[f64; 3]> = starts.iter().map(|&(k, t0)| tile.rays[k].at(t0)).collect();
+    let values = scene_points(tr, live, &points, st);
+    // NaN (undefined) is not inside.
+    if values.iter().any(|&(v, _)| v.is_nan() || v >= 0.0) {
+        return false;
     }
     for (i, j) in b.pixels() {
         let k = tile.idx(i, j);
         tile.class[k] = Class::Included;
         tile.hits[k] = None;
     }
-    for (k, t, obj) in starts {
+    for (&(k, t), &(_, obj)) in starts.iter().zip(&values) {
         tile.hits[k] = Some(Hit {
             t,
             obj,
