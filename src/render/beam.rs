@@ -63,6 +63,12 @@ impl TileRays {
     fn idx(&self, i: u32, j: u32) -> usize {
         (j * self.w + i) as usize
     }
+
+    // Whether `b` is the whole tile.
+    fn is_whole(&self, b: Rect) -> bool {
+        let h = self.rays.len() as u32 / self.w.max(1);
+        b.x0 == 0 && b.y0 == 0 && b.x1 == self.w && b.y1 == h
+    }
 }
 
 /// Traces every pixel of the tile with beams.
@@ -160,8 +166,14 @@ fn beam_tests(
                 return;
             }
             // Pruning nests: each quarter prunes the tape its parent
-            // block pruned, one interval pass over a short tape.
-            split_pruned(tr, tile, b, (xs, ys, Interval::new(t0, t1)), t0, live, st);
+            // block pruned, one interval pass over a short tape. The whole
+            // tile's block spans the region its tile was pruned to: it
+            // would only prune again what is already pruned.
+            if tile.is_whole(b) {
+                split(tr, tile, b, t0, live, st);
+            } else {
+                split_pruned(tr, tile, b, (xs, ys, Interval::new(t0, t1)), t0, live, st);
+            }
             return;
         }
         Sweep::Candidate(ta, tb) => (ta, tb),
