@@ -27,7 +27,7 @@
 
 use super::camera::{CornerRays, PixelRay};
 use super::probe::{self, Form, Rect, Sweep};
-use super::ray::{scene_points, trace_ray};
+use super::ray::{scene_point, scene_points, trace_ray};
 use super::refine::{Bracket, refine_batch};
 use super::stats::RenderStats;
 use super::tracer::{TileState, Tracer};
@@ -112,12 +112,29 @@ fn block(
         let k = tile.idx(b.x0, b.y0);
         let (pt0, pt1) = tile.slabs[k].unwrap_or((t0, t1));
         let ray = tile.rays[k];
-        // The ray starts at its own clip start, not at the block's rejected
-        // prefix: the bisection pieces, and so the tangency decisions of
-        // the first-root policy, are then those of `Method::Pixel`, and
-        // both methods draw the same pixels. Re-rejecting the prefix costs
-        // a few interval evaluations.
-        tile.hits[k] = trace_ray(tr, &ray, pt0, pt1, live, st);
+        // In a scene large enough to prune (`Tracer::large`), the ray starts where the
+        // blocks above it proved its beam empty (`t_floor`) rather than at
+        // its own clip start, when f is positive there: sweeping that
+        // prefix again cost a third of a 1000-sphere render, its pieces
+        // evaluated on the tile's slice tapes of hundreds of ops. No
+        // surface is skipped (interval arithmetic excluded it over the
+        // whole beam). `Method::Pixel`'s rays start at their clip starts
+        // and cut their pieces elsewhere: roots are refined from other
+        // brackets (depths agree to the refinement tolerance), and where
+        // f overflows or is undefined along the prefix the two sweeps can
+        // settle a pixel differently (an adversarial 2-op scene drew 198
+        // more pixels), so small scenes, where the prefix costs a few
+        // short evaluations, keep the clip start and the pixel method's
+        // exact mask.
+        let start = if tr.large
+            && t_floor > pt0
+            && scene_point(tr, live, ray.at(t_floor), &mut st.stats).0 > 0.0
+        {
+            t_floor
+        } else {
+            pt0
+        };
+        tile.hits[k] = trace_ray(tr, &ray, start, pt1, live, st);
         tile.class[k] = Class::Ray;
         return;
     }

@@ -80,6 +80,11 @@ pub(crate) struct Tracer<'a> {
     /// The interior ends, in increasing order, of the slices of the tile
     /// these evaluators are pruned to (empty outside such a tile).
     pub slice_ends: Arc<[f64]>,
+    /// Some object's whole function has [`PRUNE_MIN_OPS`] live ops or
+    /// more (whatever the evaluators and the pruning option): single rays
+    /// in a beam then start at the beam's proven-empty prefix (see
+    /// `beam::block`).
+    pub large: bool,
 }
 
 /// Whether the mean-value form still pays in one tile, per block size.
@@ -149,6 +154,7 @@ impl<'a> Tracer<'a> {
                 Some(Arc::new(Tape::new(f)))
             })
             .collect();
+        let large = live_ops.iter().any(|&n| n >= PRUNE_MIN_OPS);
         Tracer {
             cam,
             evals,
@@ -162,6 +168,7 @@ impl<'a> Tracer<'a> {
             flat: constant_along_rays(&cam, scene),
             groups: Arc::default(),
             slice_ends: Arc::new([]),
+            large,
         }
     }
 
