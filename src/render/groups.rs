@@ -158,6 +158,7 @@ mod tests {
             flat: false,
             groups: Default::default(),
             slice_ends: std::sync::Arc::new([]),
+            large: false,
         }
     }
 

@@ -423,6 +423,7 @@ mod tests {
             flat: false,
             groups: Default::default(),
             slice_ends: std::sync::Arc::new([]),
+            large: false,
         };
         let (o, d) = ([-2.0, 0.0, 0.0], [1.0, 0.0, 0.0]);
         let ray = PixelRay {

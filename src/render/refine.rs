@@ -375,6 +375,7 @@ mod tests {
                 flat: false,
                 groups: Default::default(),
                 slice_ends: std::sync::Arc::new([]),
+                large: false,
             };
             let brackets: Vec<Bracket> = (0..24)
                 .map(|_| {

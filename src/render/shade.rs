@@ -461,6 +461,7 @@ mod tests {
             flat: false,
             groups: Default::default(),
             slice_ends: std::sync::Arc::new([]),
+            large: false,
         };
         let color = [0.8, 0.3, 0.2];
         let mut seed = 0x1234_5678_9abc_def0u64;
