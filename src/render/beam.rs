@@ -112,9 +112,10 @@ fn block(
         let k = tile.idx(b.x0, b.y0);
         let (pt0, pt1) = tile.slabs[k].unwrap_or((t0, t1));
         let ray = tile.rays[k];
-        // In a scene large enough to prune (`Tracer::large`), the ray starts where the
-        // blocks above it proved its beam empty (`t_floor`) rather than at
-        // its own clip start, when f is positive there: sweeping that
+        // In a scene large enough to prune (`Tracer::large`), the ray
+        // starts where the blocks above it proved its beam empty
+        // (`t_floor`) rather than at its clip start, when f is positive
+        // there: sweeping that
         // prefix again cost a third of a 1000-sphere render, its pieces
         // evaluated on the tile's slice tapes of hundreds of ops. No
         // surface is skipped (interval arithmetic excluded it over the
