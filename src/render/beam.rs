@@ -27,8 +27,8 @@
 
 use super::camera::{CornerRays, PixelRay};
 use super::probe::{self, Form, Rect, Sweep};
-use super::ray::{scene_point, scene_points, trace_ray};
-use super::refine::{Bracket, refine_batch};
+use super::ray::{scene_point, trace_ray};
+use super::refine::{Bracket, refine_batch, scene_points};
 use super::stats::RenderStats;
 use super::tracer::{TileState, Tracer};
 use super::{Class, Hit};

@@ -58,33 +58,6 @@ pub(crate) fn scene_point(
     best
 }
 
-/// [`scene_point`] at each of `points`, one batch per live object (the
-/// same bits).
-pub(crate) fn scene_points(
-    tr: &Tracer<'_>,
-    live: &[u32],
-    points: &[[f64; 3]],
-    st: &mut RenderStats,
-) -> Vec<(f64, usize)> {
-    let n = points.len();
-    let mut best = vec![(f64::INFINITY, live.first().copied().unwrap_or(0) as usize); n];
-    if n == 0 {
-        return best;
-    }
-    let coords: [Vec<f64>; 3] = std::array::from_fn(|c| points.iter().map(|p| p[c]).collect());
-    let mut v = vec![0.0; n];
-    for &k in live {
-        tr.evals[k as usize].point_batch(&coords[0], &coords[1], &coords[2], &mut v);
-        for (b, &vi) in best.iter_mut().zip(&v) {
-            if vi < b.0 {
-                *b = (vi, k as usize);
-            }
-        }
-    }
-    st.point_evals += (n * live.len()) as u64;
-    best
-}
-
 /// Point test of the start: a ray that begins inside a solid hits at t0.
 pub(crate) fn starts_inside(
     tr: &Tracer<'_>,

@@ -240,6 +240,20 @@ pub(crate) fn refine_batch(
     out
 }
 
+/// `ray::scene_point` at each of `points`, one batch per live object (the
+/// same bits).
+pub(crate) fn scene_points(
+    tr: &Tracer<'_>,
+    live: &[u32],
+    points: &[[f64; 3]],
+    st: &mut RenderStats,
+) -> Vec<(f64, usize)> {
+    if points.is_empty() {
+        return Vec::new();
+    }
+    SceneBatch::new(points.len()).min_and_object(tr, live, points, st)
+}
+
 // Scratch for evaluating the scene at a batch of points: coordinate
 // columns and one object's values.
 struct SceneBatch {
