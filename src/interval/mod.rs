@@ -308,6 +308,18 @@ impl Interval {
         Interval::from_lanes(n, h)
     }
 
+    /// `self · [t, t]`, the same bits as `self.mul(Interval::point(t))`
+    /// with half the products (ray boxes at a fixed parameter).
+    #[inline]
+    pub fn mul_point(self, t: f64) -> Interval {
+        if t.is_finite() && self.lo.is_finite() && self.hi.is_finite() {
+            // `mul`'s four products are these two, each twice.
+            let (a, b) = (self.lo * t, self.hi * t);
+            return Interval::from_lanes(up(-mn(a, b)), up(mx(a, b)));
+        }
+        self.mul(Interval::point(t))
+    }
+
     /// `self / o` over the nonzero part of `o` (a quotient by 0 is not
     /// real). When 0 is outside `o`: the hull of the four quotients (EMPTY
     /// if either operand is). Otherwise see [`Interval::div_by_zero_part`].

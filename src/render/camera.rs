@@ -15,7 +15,7 @@ use glam::DVec3;
 
 use crate::interval::Interval;
 pub use crate::interval::boxes::IBox;
-use crate::interval::boxes::{box_hull, ray_box};
+use crate::interval::boxes::{box_hull, ray_point_box};
 use crate::scene::{Bounds, Camera, Projection};
 
 /// Smallest depth tolerance, in t units.
@@ -254,7 +254,7 @@ impl RayCamera {
     /// The corner rays of the screen rectangle `xs × ys`, for repeated
     /// hulls over different T.
     pub fn corners(&self, xs: (f64, f64), ys: (f64, f64)) -> CornerRays {
-        CornerRays([
+        CornerRays::new([
             self.ray_at(xs.0, ys.0),
             self.ray_at(xs.1, ys.0),
             self.ray_at(xs.0, ys.1),
@@ -289,9 +289,39 @@ fn bits(b: &IBox) -> [u64; 6] {
 
 /// Enclosures of the origin and direction of a block's four corner rays.
 #[derive(Copy, Clone, Debug)]
-pub struct CornerRays(pub [(IBox, IBox); 4]);
+pub struct CornerRays {
+    /// Origin and direction enclosures, corner by corner.
+    pub rays: [(IBox, IBox); 4],
+    // What the corners share, found once: a block's hull is taken at
+    // every piece of its sweep, and comparing the corners' bits there
+    // cost more than the hull itself.
+    shape: Shape,
+}
+
+// Which part of the ray the four corners share, to the bit.
+#[derive(Copy, Clone, Debug, PartialEq)]
+enum Shape {
+    SharedDirection,
+    SharedOrigin,
+    Neither,
+}
 
 impl CornerRays {
+    /// The corner rays `rays` (origin and direction enclosures).
+    pub fn new(rays: [(IBox, IBox); 4]) -> CornerRays {
+        let shared = |part: fn(&(IBox, IBox)) -> IBox| {
+            rays.iter().all(|r| bits(&part(r)) == bits(&part(&rays[0])))
+        };
+        let shape = if shared(|r| r.1) {
+            Shape::SharedDirection
+        } else if shared(|r| r.0) {
+            Shape::SharedOrigin
+        } else {
+            Shape::Neither
+        };
+        CornerRays { rays, shape }
+    }
+
     /// A sound hull of the block's ray points for t ∈ `t`: the hull of the
     /// corner rays' points at both ends.
     ///
@@ -302,27 +332,21 @@ impl CornerRays {
     /// where they share one origin (a pinhole) that of the directions'
     /// hull: two ray points instead of eight.
     pub fn hull(&self, t: Interval) -> IBox {
-        let c = &self.0;
-        let shared = |part: fn(&(IBox, IBox)) -> IBox| {
-            c.iter().all(|r| bits(&part(r)) == bits(&part(&c[0])))
+        let c = &self.rays;
+        let (o, d) = match self.shape {
+            Shape::SharedDirection => (self.origins(), c[0].1),
+            Shape::SharedOrigin => (c[0].0, self.directions()),
+            Shape::Neither => return self.hull_of_corners(t),
         };
-        let (o, d) = if shared(|r| r.1) {
-            (self.origins(), c[0].1)
-        } else if shared(|r| r.0) {
-            (c[0].0, self.directions())
-        } else {
-            return self.hull_of_corners(t);
-        };
-        let at = |tc: f64| ray_box(o, d, Interval::point(tc));
-        box_hull(at(t.lo), at(t.hi))
+        box_hull(ray_point_box(o, d, t.lo), ray_point_box(o, d, t.hi))
     }
 
     // [`CornerRays::hull`] corner by corner.
     fn hull_of_corners(&self, t: Interval) -> IBox {
-        let mut out = ray_box(self.0[0].0, self.0[0].1, Interval::point(t.lo));
-        for (o, d) in &self.0 {
+        let mut out = ray_point_box(self.rays[0].0, self.rays[0].1, t.lo);
+        for (o, d) in &self.rays {
             for tc in [t.lo, t.hi] {
-                out = box_hull(out, ray_box(*o, *d, Interval::point(tc)));
+                out = box_hull(out, ray_point_box(*o, *d, tc));
             }
         }
         out
@@ -331,14 +355,14 @@ impl CornerRays {
     /// A sound hull of the block's ray origins (affine in screen position,
     /// like the directions).
     pub fn origins(&self) -> IBox {
-        let c = &self.0;
+        let c = &self.rays;
         box_hull(box_hull(c[0].0, c[1].0), box_hull(c[2].0, c[3].0))
     }
 
     /// A sound hull of the block's ray directions: the hull of the corner
     /// directions, since a ray's direction is affine in its screen position.
     pub fn directions(&self) -> IBox {
-        let c = &self.0;
+        let c = &self.rays;
         box_hull(box_hull(c[0].1, c[1].1), box_hull(c[2].1, c[3].1))
     }
 }
@@ -433,8 +457,9 @@ mod tests {
                 let t = Interval::new(a, a + rng.range(0.0, 10.0));
                 assert_eq!(bits(&c.hull(t)), bits(&c.hull_of_corners(t)), "{t:?} {c:?}");
                 let same = |k: usize| {
-                    c.0.iter()
-                        .all(|r| bits(&[r.0, r.1][k]) == bits(&[c.0[0].0, c.0[0].1][k]))
+                    c.rays
+                        .iter()
+                        .all(|r| bits(&[r.0, r.1][k]) == bits(&[c.rays[0].0, c.rays[0].1][k]))
                 };
                 shortcuts += usize::from(same(0) || same(1));
             }
@@ -475,7 +500,7 @@ mod tests {
                     for k in 0..=16 {
                         let tk = t.lo + (t.hi - t.lo) * k as f64 / 16.0;
                         let p = r.at(tk);
-                        let b = ray_box(r.o, r.d, Interval::point(tk));
+                        let b = crate::interval::boxes::ray_box(r.o, r.d, Interval::point(tk));
                         for c in 0..3 {
                             assert!(h[c].contains(p[c]), "{cam:?} {i} {j} {tk} {c}");
                             assert!(h[c].lo <= b[c].lo && b[c].hi <= h[c].hi);
