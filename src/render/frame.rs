@@ -460,6 +460,74 @@ fn downsample(t: TileOut, s: u32) -> TileOut {
     }
 }
 
+/// Side, in pixels, of the squares of a tile whose split pixels are traced
+/// together at the fine resolution. A fine tile spans only squares that
+/// hold a split pixel: building, clipping and sweeping the sub-samples of
+/// a whole tile cost more than tracing its few split pixels.
+const FINE_GROUP: u32 = 2;
+
+// The sub-samples of a tile's split pixels (`split`, with the ray
+// parameter each pixel's area was proven empty up to in `floors`),
+// traced with `fine` at `f`× the resolution, square by square of
+// `FINE_GROUP` pixels, other sub-samples masked out: per pixel of the
+// tile (`area`: x0, y0, w, h) the mean linear colour, covered fraction
+// and nearest hit of its sub-samples (zero, zero, +inf where not split).
+fn trace_split(
+    fine: &Tracer<'_>,
+    opts: &RenderOptions,
+    (x0, y0, w, h): (u32, u32, u32, u32),
+    (split, floors): (&[bool], &[f64]),
+    f: u32,
+    bg: [f64; 3],
+    stats: &mut RenderStats,
+) -> (Vec<[f64; 3]>, Vec<f64>, Vec<f64>) {
+    let n = (w * h) as usize;
+    let mut linear = vec![[0.0; 3]; n];
+    let mut coverage = vec![0.0; n];
+    let mut depth = vec![f64::INFINITY; n];
+    let fine_opts = RenderOptions {
+        want_depth: false,
+        want_normals: false,
+        want_classify: false,
+        progress: false,
+        ..opts.clone()
+    };
+    for gy in (0..h).step_by(FINE_GROUP as usize) {
+        for gx in (0..w).step_by(FINE_GROUP as usize) {
+            let (gw, gh) = (FINE_GROUP.min(w - gx), FINE_GROUP.min(h - gy));
+            let in_tile = |(i, j): (u32, u32)| ((gy + j) * w + gx + i) as usize;
+            let pixels = (0..gh).flat_map(|j| (0..gw).map(move |i| (i, j)));
+            if !pixels.clone().any(|p| split[in_tile(p)]) {
+                continue;
+            }
+            let (fw, fh) = (gw * f, gh * f);
+            let pixel = |k: usize| in_tile(((k as u32 % fw) / f, (k as u32 / fw) / f));
+            let nf = (fw * fh) as usize;
+            let mask: Vec<bool> = (0..nf).map(|k| split[pixel(k)]).collect();
+            // Each sub-sample starts where its pixel's area was proven
+            // empty up to: the fine render need not sweep that prefix again.
+            let starts: Vec<f64> = (0..nf).map(|k| floors[pixel(k)]).collect();
+            let spec = TileSpec {
+                x0: (x0 + gx) * f,
+                y0: (y0 + gy) * f,
+                w: fw,
+                h: fh,
+                mask: Some(&mask),
+                floors: Some(&starts),
+            };
+            let out = downsample(render_tile(fine, &fine_opts, spec, bg), f);
+            stats.merge(&out.state.stats);
+            for (q, p) in pixels.enumerate() {
+                let k = in_tile(p);
+                linear[k] = out.linear[q];
+                coverage[k] = out.coverage[q];
+                depth[k] = out.depth[q];
+            }
+        }
+    }
+    (linear, coverage, depth)
+}
+
 // Applies IAA to a tile (or, for the other modes, counts its samples):
 // pixel-area tests, then the split pixels traced together at the fine
 // resolution (`fine`: the tracer of the 2^depth× image), with beams, their
@@ -501,38 +569,13 @@ fn anti_alias(
     let (split, floors) = aa::classify_tile(tr, &mut px, bg, threshold, &mut st);
     let f = 1u32 << depth;
     let sub = (depth > 0 && split.iter().any(|&s| s)).then(|| {
-        let (fw, fh) = (t.w * f, t.h * f);
-        let pixel = |k: usize| (((k as u32 / fw) / f) * t.w + (k as u32 % fw) / f) as usize;
-        let n = (fw * fh) as usize;
-        let mask: Vec<bool> = (0..n).map(|k| split[pixel(k)]).collect();
-        // Each sub-sample starts where its pixel's area was proven empty
-        // up to: the fine render need not sweep that prefix again.
-        let floors: Vec<f64> = (0..n).map(|k| floors[pixel(k)]).collect();
-        let fine_opts = RenderOptions {
-            want_depth: false,
-            want_normals: false,
-            want_classify: false,
-            progress: false,
-            ..opts.clone()
-        };
-        let spec = TileSpec {
-            x0: t.x0 * f,
-            y0: t.y0 * f,
-            w: fw,
-            h: fh,
-            mask: Some(&mask),
-            floors: Some(&floors),
-        };
-        downsample(render_tile(fine, &fine_opts, spec, bg), f)
+        let area = (t.x0, t.y0, t.w, t.h);
+        trace_split(fine, opts, area, (&split, &floors), f, bg, &mut st.stats)
     });
-    if let Some(s) = &sub {
-        st.stats.merge(&s.state.stats);
-    }
     aa::merge_split(
         &mut px,
         &split,
-        sub.as_ref()
-            .map(|s| (&s.linear[..], &s.coverage[..], &s.depth[..])),
+        sub.as_ref().map(|(l, c, d)| (&l[..], &c[..], &d[..])),
         f * f,
         &mut st.stats,
     );
