@@ -105,7 +105,7 @@ impl Variant {
 /// and beam methods, beam + grid:2, grid:4 and grid:8, and beam + IAA at
 /// depth 2 (up to 16 samples a pixel) with thresholds 1 (every included
 /// pixel is smooth: geometry alone decides), 1/4, 1/16 and 1/64, and at
-/// depth 3 (up to 64, grid:8's sample positions) with 1/16 and 1/64.
+/// depth 3 (up to 64, grid:8's sample positions) with 1, 1/16 and 1/64.
 pub fn default_variants() -> Vec<Variant> {
     let mut v = Vec::new();
     for steps in [16, 64, 256] {
@@ -137,7 +137,7 @@ pub fn default_variants() -> Vec<Variant> {
             },
         ));
     }
-    for d in [16u32, 64] {
+    for d in [1u32, 16, 64] {
         v.push(Variant::new(
             Family::BeamIaa,
             &format!("t=1/{d} depth=3"),
@@ -460,6 +460,7 @@ mod tests {
             "beam+grid",
             "beam+grid",
             "beam+grid",
+            "beam+iaa",
             "beam+iaa",
             "beam+iaa",
             "beam+iaa",

@@ -492,37 +492,48 @@ fn trace_split(
         progress: false,
         ..opts.clone()
     };
-    for gy in (0..h).step_by(FINE_GROUP as usize) {
-        for gx in (0..w).step_by(FINE_GROUP as usize) {
-            let (gw, gh) = (FINE_GROUP.min(w - gx), FINE_GROUP.min(h - gy));
-            let in_tile = |(i, j): (u32, u32)| ((gy + j) * w + gx + i) as usize;
-            let pixels = (0..gh).flat_map(|j| (0..gw).map(move |i| (i, j)));
-            if !pixels.clone().any(|p| split[in_tile(p)]) {
-                continue;
-            }
+    let squares: Vec<(u32, u32)> = (0..h)
+        .step_by(FINE_GROUP as usize)
+        .flat_map(|gy| (0..w).step_by(FINE_GROUP as usize).map(move |gx| (gx, gy)))
+        .collect();
+    let in_tile = |(gx, gy): (u32, u32), (i, j): (u32, u32)| ((gy + j) * w + gx + i) as usize;
+    let pixels = |(gx, gy): (u32, u32)| {
+        let (gw, gh) = (FINE_GROUP.min(w - gx), FINE_GROUP.min(h - gy));
+        (0..gh).flat_map(move |j| (0..gw).map(move |i| (i, j)))
+    };
+    // The squares are traced in parallel: a tile's split pixels can be
+    // most of a render's work (a silhouette crossing few tiles), more than
+    // one thread should carry.
+    let outs: Vec<((u32, u32), TileOut)> = squares
+        .par_iter()
+        .filter(|&&g| pixels(g).any(|p| split[in_tile(g, p)]))
+        .map(|&g| {
+            let (gw, gh) = (FINE_GROUP.min(w - g.0), FINE_GROUP.min(h - g.1));
             let (fw, fh) = (gw * f, gh * f);
-            let pixel = |k: usize| in_tile(((k as u32 % fw) / f, (k as u32 / fw) / f));
+            let pixel = |k: usize| in_tile(g, ((k as u32 % fw) / f, (k as u32 / fw) / f));
             let nf = (fw * fh) as usize;
             let mask: Vec<bool> = (0..nf).map(|k| split[pixel(k)]).collect();
             // Each sub-sample starts where its pixel's area was proven
             // empty up to: the fine render need not sweep that prefix again.
             let starts: Vec<f64> = (0..nf).map(|k| floors[pixel(k)]).collect();
             let spec = TileSpec {
-                x0: (x0 + gx) * f,
-                y0: (y0 + gy) * f,
+                x0: (x0 + g.0) * f,
+                y0: (y0 + g.1) * f,
                 w: fw,
                 h: fh,
                 mask: Some(&mask),
                 floors: Some(&starts),
             };
-            let out = downsample(render_tile(fine, &fine_opts, spec, bg), f);
-            stats.merge(&out.state.stats);
-            for (q, p) in pixels.enumerate() {
-                let k = in_tile(p);
-                linear[k] = out.linear[q];
-                coverage[k] = out.coverage[q];
-                depth[k] = out.depth[q];
-            }
+            (g, downsample(render_tile(fine, &fine_opts, spec, bg), f))
+        })
+        .collect();
+    for (g, out) in &outs {
+        stats.merge(&out.state.stats);
+        for (q, p) in pixels(*g).enumerate() {
+            let k = in_tile(*g, p);
+            linear[k] = out.linear[q];
+            coverage[k] = out.coverage[q];
+            depth[k] = out.depth[q];
         }
     }
     (linear, coverage, depth)
