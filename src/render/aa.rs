@@ -33,8 +33,9 @@
 //! another set of shadowed lights than a hit 4-neighbour's (in the same
 //! tile) is never smooth: shadow edges are split like silhouettes. This is
 //! a sampling heuristic, not a proof: a shadow narrower than the pixel
-//! spacing can fall between base samples, and an edge running exactly
-//! along a tile border is not seen. The
+//! spacing can fall between base samples. Neighbours across a tile's
+//! border are read from the tiles beside it (the base render runs a row
+//! of tiles ahead of anti-aliasing). The
 //! pixel's centre ray is never discarded when it is the only evidence of
 //! surface: if every sub-sample of a split pixel misses but the centre ray
 //! hit, the centre sample joins the average with a sub-sample's weight, so
@@ -220,6 +221,66 @@ pub(crate) struct TilePixels<'a> {
     pub shadowed: &'a [u64],
 }
 
+/// A tile's base samples along its four sides, which the tiles beside it
+/// read for the shadow-edge rule: whether each hit, and the lights
+/// shadowed there.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct TileEdges {
+    top: Vec<(bool, u64)>,
+    bottom: Vec<(bool, u64)>,
+    left: Vec<(bool, u64)>,
+    right: Vec<(bool, u64)>,
+}
+
+impl TileEdges {
+    /// The sides of a `w`×`h` tile from its base depths (+inf: no hit)
+    /// and shadowed lights, row-major.
+    pub(crate) fn new(w: u32, h: u32, depth: &[f64], shadowed: &[u64]) -> TileEdges {
+        let at = |i: u32, j: u32| {
+            let k = (j * w + i) as usize;
+            (depth[k].is_finite(), shadowed[k])
+        };
+        let (w1, h1) = (w.saturating_sub(1), h.saturating_sub(1));
+        TileEdges {
+            top: (0..w).map(|i| at(i, 0)).collect(),
+            bottom: (0..w).map(|i| at(i, h1)).collect(),
+            left: (0..h).map(|j| at(0, j)).collect(),
+            right: (0..h).map(|j| at(w1, j)).collect(),
+        }
+    }
+}
+
+/// The sides of the tiles around one tile (None at the image's border):
+/// tiles of a row share their height and tiles of a column their width,
+/// so a neighbour's side lines up with the tile's.
+#[derive(Copy, Clone, Default)]
+pub(crate) struct Beside<'e> {
+    /// The tile above (its bottom row is read).
+    pub above: Option<&'e TileEdges>,
+    /// The tile below (its top row).
+    pub below: Option<&'e TileEdges>,
+    /// The tile to the left (its right column).
+    pub left: Option<&'e TileEdges>,
+    /// The tile to the right (its left column).
+    pub right: Option<&'e TileEdges>,
+}
+
+impl Beside<'_> {
+    // The base sample at tile coordinates (i, j) just outside a w×h tile.
+    fn at(&self, (i, j): (i64, i64), (w, h): (i64, i64)) -> Option<(bool, u64)> {
+        let side = |e: Option<&TileEdges>, v: fn(&TileEdges) -> &Vec<(bool, u64)>, k: i64| {
+            e.and_then(|e| v(e).get(usize::try_from(k).ok()?).copied())
+        };
+        match (i, j) {
+            (-1, j) => side(self.left, |e| &e.right, j),
+            (i, -1) => side(self.above, |e| &e.bottom, i),
+            (i, j) if i == w => side(self.right, |e| &e.left, j),
+            (i, j) if j == h => side(self.below, |e| &e.top, i),
+            _ => None,
+        }
+    }
+}
+
 /// What a cell's beam tests decided.
 #[derive(Copy, Clone, Debug, PartialEq)]
 enum Cell {
@@ -244,6 +305,7 @@ struct Decision {
 pub(crate) fn classify_tile(
     tr: &Tracer<'_>,
     px: &mut TilePixels<'_>,
+    beside: Beside<'_>,
     background: [f64; 3],
     threshold: f64,
     st: &mut TileState,
@@ -252,23 +314,27 @@ pub(crate) fn classify_tile(
     let mut split = vec![false; n];
     let mut floors = vec![0.0; n];
     // A hit pixel whose shadow state differs from a hit neighbour's sits
-    // on a shadow edge (neighbours in other tiles are not seen, so an edge
-    // running exactly along a tile border is missed).
-    let hit = |i: u32, j: u32| px.depth[(j * px.w + i) as usize].is_finite();
+    // on a shadow edge; neighbours in the tiles around are read from
+    // `beside`.
+    let (w, h) = (i64::from(px.w), i64::from(px.h));
+    let base = |i: i64, j: i64| -> Option<(bool, u64)> {
+        if (0..w).contains(&i) && (0..h).contains(&j) {
+            let k = (j * w + i) as usize;
+            Some((px.depth[k].is_finite(), px.shadowed[k]))
+        } else {
+            beside.at((i, j), (w, h))
+        }
+    };
     let shadow_edge: Vec<bool> = (0..n)
         .map(|k| {
-            let (i, j) = (k as u32 % px.w, k as u32 / px.w);
-            hit(i, j)
-                && [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)]
+            let (i, j) = (k as i64 % w, k as i64 / w);
+            base(i, j).is_some_and(|(hit, mine)| {
+                hit && [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)]
                     .iter()
                     .any(|&(di, dj)| {
-                        let (ni, nj) = (i64::from(i) + di, i64::from(j) + dj);
-                        (0..i64::from(px.w)).contains(&ni)
-                            && (0..i64::from(px.h)).contains(&nj)
-                            && hit(ni as u32, nj as u32)
-                            && px.shadowed[(nj as u32 * px.w + ni as u32) as usize]
-                                != px.shadowed[k]
+                        base(i + di, j + dj).is_some_and(|(nhit, theirs)| nhit && theirs != mine)
                     })
+            })
         })
         .collect();
     let ctx = Ctx {

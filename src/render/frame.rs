@@ -9,7 +9,7 @@ use std::time::Instant;
 use image::Rgb;
 use rayon::prelude::*;
 
-use super::aa::{self, Aa, AaError};
+use super::aa::{self, Aa, AaError, Beside, TileEdges};
 use super::band::{Band, FloatLayers, band};
 use super::camera::{self, RayCamera};
 use super::stats::RenderStats;
@@ -137,7 +137,16 @@ impl<'a> Frame<'a> {
     pub fn render(self) -> RenderOutput {
         let all = tiles(self.opts.width, self.opts.height);
         let done = AtomicUsize::new(0);
-        let outs = self.trace(&all, &done, all.len());
+        let mut outs = self.trace(&all);
+        let edges: Vec<TileEdges> = outs.iter().map(edges_of).collect();
+        let cols = self.opts.width.div_ceil(TILE) as usize;
+        let beside = |i: usize| Beside {
+            above: i.checked_sub(cols).map(|k| &edges[k]),
+            below: edges.get(i + cols),
+            left: (i % cols > 0).then(|| &edges[i - 1]),
+            right: (i % cols + 1 < cols).then(|| &edges[i + 1]),
+        };
+        self.anti_alias_tiles(&mut outs, beside, &done, all.len());
         if self.opts.progress && self.progress.is_none() {
             eprintln!();
         }
@@ -149,7 +158,7 @@ impl<'a> Frame<'a> {
 
     /// Traces one row of tiles at a time (the row's tiles in parallel) and
     /// hands each finished band of image rows to `sink`, top to bottom, so
-    /// memory holds one row of tiles and two bands, not the image. `sink`
+    /// memory holds two rows of tiles and two bands, not the image. `sink`
     /// runs on a worker of the render's pool while the next row is traced.
     /// Returns the counters (the same as [`Frame::render`]'s); its
     /// `output_ms` includes the time spent in `sink`. Stops at the first
@@ -173,17 +182,39 @@ impl<'a> Frame<'a> {
             sink(&b)?;
             Ok(ms_since(t0))
         };
-        for y0 in (0..h).step_by(TILE as usize) {
-            let row = tile_row(w, h, y0);
+        // A row's anti-aliasing reads the base samples just outside its
+        // tiles (`aa::Beside`), the next row's included: the base render
+        // runs one row ahead.
+        let rows: Vec<u32> = (0..h).step_by(TILE as usize).collect();
+        let mut above: Vec<TileEdges> = Vec::new();
+        let mut current = self.pool.install(|| self.trace(&tile_row(w, h, 0)));
+        for (r, &y0) in rows.iter().enumerate() {
             // Encoding the last band overlaps tracing this row: the sink
             // is serial (one file, top to bottom), the tracing is not.
-            let (outs, written) = self.pool.install(|| {
+            let (traced, written) = self.pool.install(|| {
                 rayon::join(
-                    || self.trace(&row, &done, total),
+                    || {
+                        let next = rows.get(r + 1).map(|&y| self.trace(&tile_row(w, h, y)));
+                        let edges: Vec<TileEdges> = current.iter().map(edges_of).collect();
+                        let below: Vec<TileEdges> = next.iter().flatten().map(edges_of).collect();
+                        let mut outs = std::mem::take(&mut current);
+                        let n = outs.len();
+                        let beside = |i: usize| Beside {
+                            above: above.get(i),
+                            below: below.get(i),
+                            left: i.checked_sub(1).map(|k| &edges[k]),
+                            right: (i + 1 < n).then(|| &edges[i + 1]),
+                        };
+                        self.anti_alias_tiles(&mut outs, beside, &done, total);
+                        (outs, next, edges)
+                    },
                     || pending.take().map_or(Ok(0.0), &mut emit),
                 )
             });
             output_ms += written?;
+            let (outs, next, edges) = traced;
+            above = edges;
+            current = next.unwrap_or_default();
             self.release_groups_above(y0 + TILE);
             let t0 = Instant::now();
             pending = Some(band(
@@ -217,14 +248,9 @@ impl<'a> Frame<'a> {
         }
     }
 
-    // Traces `tiles` in parallel, each with its anti-aliasing; the results
-    // in the order of `tiles`.
-    fn trace(
-        &self,
-        tiles: &[(u32, u32, u32, u32)],
-        done: &AtomicUsize,
-        total: usize,
-    ) -> Vec<TileOut> {
+    // Traces the base render of `tiles` in parallel (a `grid:N` render's
+    // samples averaged); the results in the order of `tiles`.
+    fn trace(&self, tiles: &[(u32, u32, u32, u32)]) -> Vec<TileOut> {
         let s = self.aa.grid_factor();
         let (tr, opts, bg) = (&self.tr, &self.opts, self.bg);
         self.pool.install(|| {
@@ -239,20 +265,33 @@ impl<'a> Frame<'a> {
                         mask: None,
                         floors: None,
                     };
-                    let mut out = render_tile(tr, opts, spec, bg);
-                    if s > 1 {
-                        out = downsample(out, s);
-                    }
-                    anti_alias(tr, self.fine.as_ref(), opts, self.aa, &mut out, bg);
-                    let n = done.fetch_add(1, Ordering::Relaxed) + 1;
-                    if let Some(report) = &self.progress {
-                        report(n, total);
-                    } else if opts.progress {
-                        eprint!("\rrendering: {n}/{total} tiles");
-                    }
-                    out
+                    let out = render_tile(tr, opts, spec, bg);
+                    if s > 1 { downsample(out, s) } else { out }
                 })
                 .collect()
+        })
+    }
+
+    // Anti-aliases traced tiles in parallel (`beside(i)`: the base samples
+    // around `outs[i]`), reporting progress after each.
+    fn anti_alias_tiles<'e>(
+        &self,
+        outs: &mut [TileOut],
+        beside: impl Fn(usize) -> Beside<'e> + Sync,
+        done: &AtomicUsize,
+        total: usize,
+    ) {
+        let (tr, opts, bg) = (&self.tr, &self.opts, self.bg);
+        self.pool.install(|| {
+            outs.par_iter_mut().enumerate().for_each(|(i, out)| {
+                anti_alias(tr, self.fine.as_ref(), opts, self.aa, out, beside(i), bg);
+                let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+                if let Some(report) = &self.progress {
+                    report(n, total);
+                } else if opts.progress {
+                    eprint!("\rrendering: {n}/{total} tiles");
+                }
+            })
         })
     }
 
@@ -409,6 +448,11 @@ fn assemble(
     }
 }
 
+// The base samples along a tile's sides, before its anti-aliasing.
+fn edges_of(t: &TileOut) -> TileEdges {
+    TileEdges::new(t.w, t.h, &t.depth, &t.shadowed)
+}
+
 // Averages each s×s block of a tile traced at s× resolution, in linear
 // light. Depth: the nearest hit; normals and classes: the sample at
 // (s/2, s/2) of the block.
@@ -549,6 +593,7 @@ fn anti_alias(
     opts: &RenderOptions,
     aa: Aa,
     t: &mut TileOut,
+    beside: Beside<'_>,
     bg: [f64; 3],
 ) {
     let (Aa::Iaa { threshold, depth }, Some(fine)) = (aa, fine) else {
@@ -577,7 +622,7 @@ fn anti_alias(
         samples: &mut t.samples,
         shadowed: &t.shadowed,
     };
-    let (split, floors) = aa::classify_tile(tr, &mut px, bg, threshold, &mut st);
+    let (split, floors) = aa::classify_tile(tr, &mut px, beside, bg, threshold, &mut st);
     let f = 1u32 << depth;
     let sub = (depth > 0 && split.iter().any(|&s| s)).then(|| {
         let area = (t.x0, t.y0, t.w, t.h);
