@@ -143,7 +143,7 @@ impl<'a> Frame<'a> {
         let beside = |i: usize| Beside {
             above: i.checked_sub(cols).map(|k| &edges[k]),
             below: edges.get(i + cols),
-            left: (i % cols > 0).then(|| &edges[i - 1]),
+            left: (!i.is_multiple_of(cols)).then(|| &edges[i - 1]),
             right: (i % cols + 1 < cols).then(|| &edges[i + 1]),
         };
         self.anti_alias_tiles(&mut outs, beside, &done, all.len());
