@@ -42,6 +42,14 @@ pub fn render_aa(
     Ok(Frame::new(scene, evaluators, opts, aa)?.render())
 }
 
+/// IAA's tracers of finer images.
+struct Fine<'a> {
+    /// At 2^depth× the resolution: the sub-samples of split pixels.
+    full: Tracer<'a>,
+    /// At 2×, for pixels split by shading alone, when depth is above 1.
+    shading: Option<Tracer<'a>>,
+}
+
 /// A render whose scene, evaluators and options have been checked, ready
 /// to trace: whole into memory ([`Frame::render`]) or one row of tiles at
 /// a time ([`Frame::stream`]), with the same pixels and counters.
@@ -50,7 +58,7 @@ pub struct Frame<'a> {
     opts: RenderOptions,
     aa: Aa,
     tr: Tracer<'a>,
-    fine: Option<Tracer<'a>>,
+    fine: Option<Fine<'a>>,
     pool: rayon::ThreadPool,
     bg: [f64; 3],
     depth_range: (f64, f64),
@@ -82,13 +90,16 @@ impl<'a> Frame<'a> {
         let tr = Tracer::new(scene, evaluators, cam, opts.prune);
         // IAA traces split pixels' sub-samples on the 2^depth× image, with its
         // tighter depth tolerance (the samples are those of grid:2^depth).
+        let finer = |depth: u32| -> Result<Tracer<'a>, RenderError> {
+            let cam = RayCamera::new(&scene.camera, w << depth, h << depth)
+                .map_err(RenderError::Camera)?;
+            Ok(tr.with_camera(cam))
+        };
         let fine = match aa {
-            Aa::Iaa { depth, .. } => Some(
-                tr.with_camera(
-                    RayCamera::new(&scene.camera, w << depth, h << depth)
-                        .map_err(RenderError::Camera)?,
-                ),
-            ),
+            Aa::Iaa { depth, .. } => Some(Fine {
+                full: finer(depth)?,
+                shading: if depth > 1 { Some(finer(1)?) } else { None },
+            }),
             _ => None,
         };
         let pool = rayon::ThreadPoolBuilder::new()
@@ -244,7 +255,10 @@ impl<'a> Frame<'a> {
         let s = self.aa.grid_factor();
         self.tr.groups.release_above(y * s);
         if let (Some(fine), Aa::Iaa { depth, .. }) = (&self.fine, self.aa) {
-            fine.groups.release_above(y << depth);
+            fine.full.groups.release_above(y << depth);
+            if let Some(shading) = &fine.shading {
+                shading.groups.release_above(y << 1);
+            }
         }
     }
 
@@ -589,7 +603,7 @@ fn trace_split(
 // other sub-samples masked out.
 fn anti_alias(
     tr: &Tracer<'_>,
-    fine: Option<&Tracer<'_>>,
+    fine: Option<&Fine<'_>>,
     opts: &RenderOptions,
     aa: Aa,
     t: &mut TileOut,
@@ -622,17 +636,44 @@ fn anti_alias(
         samples: &mut t.samples,
         shadowed: &t.shadowed,
     };
-    let (split, floors) = aa::classify_tile(tr, &mut px, beside, bg, threshold, &mut st);
-    let f = 1u32 << depth;
-    let sub = (depth > 0 && split.iter().any(|&s| s)).then(|| {
-        let area = (t.x0, t.y0, t.w, t.h);
-        trace_split(fine, opts, area, (&split, &floors), f, bg, &mut st.stats)
+    let c = aa::classify_tile(tr, &mut px, beside, bg, threshold, &mut st);
+    let area = (t.x0, t.y0, t.w, t.h);
+    // Pixels split by shading alone get 2×2 sub-samples (see `aa`), the
+    // others 2^depth × 2^depth.
+    let level = |k: usize| match fine.shading {
+        Some(_) if c.shading[k] => 1,
+        _ => depth,
+    };
+    let n = c.split.len();
+    let mut sub = (depth > 0 && c.split.iter().any(|&s| s)).then(|| {
+        let full: Vec<bool> = (0..n).map(|k| c.split[k] && level(k) == depth).collect();
+        let floors = (full.as_slice(), c.floors.as_slice());
+        trace_split(
+            &fine.full,
+            opts,
+            area,
+            floors,
+            1 << depth,
+            bg,
+            &mut st.stats,
+        )
     });
+    if let (Some(shading), Some((lin, cov, dep))) = (&fine.shading, sub.as_mut()) {
+        let smooth: Vec<bool> = (0..n).map(|k| c.split[k] && level(k) == 1).collect();
+        if smooth.iter().any(|&s| s) {
+            let floors = (smooth.as_slice(), c.floors.as_slice());
+            let (l, cv, d) = trace_split(shading, opts, area, floors, 2, bg, &mut st.stats);
+            for k in (0..n).filter(|&k| smooth[k]) {
+                (lin[k], cov[k], dep[k]) = (l[k], cv[k], d[k]);
+            }
+        }
+    }
+    let per: Vec<u32> = (0..n).map(|k| 1 << (2 * level(k))).collect();
     aa::merge_split(
         &mut px,
-        &split,
+        &c.split,
         sub.as_ref().map(|(l, c, d)| (&l[..], &c[..], &d[..])),
-        f * f,
+        &per,
         &mut st.stats,
     );
     st.stats.aa_cpu_ms += ms_since(t0);
