@@ -253,6 +253,21 @@ fn sweep_of_a_custom_variant_list_has_one_row_each() {
     assert!(rows[1].pareto);
 }
 
+/// A scene's `n`² render without anti-aliasing and with IAA at threshold
+/// 1 (geometry and shadow edges alone decide), both on the interpreter.
+fn plain_and_loosest_iaa(name: &str, text: &str, n: u32) -> (RenderOutput, RenderOutput) {
+    let scene = ibeam::lang::load_scene_source(name, text).unwrap();
+    let evals = interp(&scene).unwrap();
+    let aa = Aa::Iaa {
+        threshold: 1.0,
+        depth: 2,
+    };
+    (
+        go(&scene, &evals, n, Aa::None, 1),
+        go(&scene, &evals, n, aa, 1),
+    )
+}
+
 /// A straight shadow edge that runs along the border between two tiles
 /// (a plate's shadow, seen from straight above, the edge between pixel
 /// columns 31 and 32): each side's only differing neighbour is in the
@@ -264,15 +279,8 @@ fn iaa_splits_shadow_edges_along_tile_borders() {
                 camera { eye = (0, 6, 0); target = (0, 0, 0); up = (0, 0, -1); ortho = 4; }\n\
                 bounds = (-2, -0.5, -2) .. (2, 2, 2);\n\
                 light { direction = (-1, -1, 0); color = (1, 1, 1); shadows = true; }\n";
-    let scene = ibeam::lang::load_scene_source("border.ib", text).unwrap();
-    let evals = interp(&scene).unwrap();
     let n = 48usize;
-    let plain = go(&scene, &evals, n as u32, Aa::None, 1);
-    let aa = Aa::Iaa {
-        threshold: 1.0,
-        depth: 2,
-    };
-    let out = go(&scene, &evals, n as u32, aa, 1);
+    let (plain, out) = plain_and_loosest_iaa("border.ib", text, n as u32);
     let lum = |k: usize| plain.linear[k].iter().sum::<f64>();
     for y in 0..n {
         let (a, b) = (y * n + 31, y * n + 32);
@@ -303,15 +311,8 @@ fn iaa_splits_shadow_edges() {
                 camera { eye = (0, 6, 0.001); target = (0, 0, 0); up = (0, 0, -1); fov = 30; }\n\
                 bounds = (-2, -0.5, -2) .. (2, 2, 2);\n\
                 light { direction = (-1, -1, 0); color = (1, 1, 1); shadows = true; }\n";
-    let scene = ibeam::lang::load_scene_source("shadow.ib", text).unwrap();
-    let evals = interp(&scene).unwrap();
     let n = 48usize;
-    let plain = go(&scene, &evals, n as u32, Aa::None, 1);
-    let aa = Aa::Iaa {
-        threshold: 1.0,
-        depth: 2,
-    };
-    let out = go(&scene, &evals, n as u32, aa, 1);
+    let (plain, out) = plain_and_loosest_iaa("shadow.ib", text, n as u32);
     let ground_t = plain
         .depth_t
         .iter()

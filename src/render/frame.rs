@@ -169,7 +169,8 @@ impl<'a> Frame<'a> {
 
     /// Traces one row of tiles at a time (the row's tiles in parallel) and
     /// hands each finished band of image rows to `sink`, top to bottom, so
-    /// memory holds two rows of tiles and two bands, not the image. `sink`
+    /// memory holds a row of tiles (two with IAA, whose base render runs a
+    /// row ahead) and two bands, not the image. `sink`
     /// runs on a worker of the render's pool while the next row is traced.
     /// Returns the counters (the same as [`Frame::render`]'s); its
     /// `output_ms` includes the time spent in `sink`. Stops at the first
@@ -193,22 +194,29 @@ impl<'a> Frame<'a> {
             sink(&b)?;
             Ok(ms_since(t0))
         };
-        // A row's anti-aliasing reads the base samples just outside its
-        // tiles (`aa::Beside`), the next row's included: the base render
-        // runs one row ahead.
+        // IAA's shadow-edge rule reads the base samples just outside a
+        // row's tiles (`aa::Beside`), the next row's included: with IAA
+        // the base render runs one row ahead (the other modes read none,
+        // and hold one row).
+        let look_ahead = matches!(self.aa, Aa::Iaa { .. });
         let rows: Vec<u32> = (0..h).step_by(TILE as usize).collect();
         let mut above: Vec<TileEdges> = Vec::new();
-        let mut current = self.pool.install(|| self.trace(&tile_row(w, h, 0)));
+        let mut current = look_ahead.then(|| self.pool.install(|| self.trace(&tile_row(w, h, 0))));
         for (r, &y0) in rows.iter().enumerate() {
             // Encoding the last band overlaps tracing this row: the sink
             // is serial (one file, top to bottom), the tracing is not.
             let (traced, written) = self.pool.install(|| {
                 rayon::join(
                     || {
-                        let next = rows.get(r + 1).map(|&y| self.trace(&tile_row(w, h, y)));
-                        let edges: Vec<TileEdges> = current.iter().map(edges_of).collect();
+                        let mut outs = current
+                            .take()
+                            .unwrap_or_else(|| self.trace(&tile_row(w, h, y0)));
+                        let next = rows
+                            .get(r + 1)
+                            .filter(|_| look_ahead)
+                            .map(|&y| self.trace(&tile_row(w, h, y)));
+                        let edges: Vec<TileEdges> = outs.iter().map(edges_of).collect();
                         let below: Vec<TileEdges> = next.iter().flatten().map(edges_of).collect();
-                        let mut outs = std::mem::take(&mut current);
                         let n = outs.len();
                         let beside = |i: usize| Beside {
                             above: above.get(i),
@@ -225,7 +233,7 @@ impl<'a> Frame<'a> {
             output_ms += written?;
             let (outs, next, edges) = traced;
             above = edges;
-            current = next.unwrap_or_default();
+            current = next;
             self.release_groups_above(y0 + TILE);
             let t0 = Instant::now();
             pending = Some(band(

@@ -32,7 +32,9 @@
 //! tests that [`beam`] and [`aa`] share.
 //!
 //! [`Frame::stream`] is the bounded-memory path: it traces one row of
-//! tiles at a time and hands out finished bands of image rows, which the
+//! tiles at a time (with IAA, the next row's base render a step ahead,
+//! which its shadow-edge rule reads across the tiles' border) and
+//! hands out finished bands of image rows, which the
 //! CLI encodes into PNGs as they come (and, with
 //! [`Frame::with_float_layers`], the float values 16-bit PNGs and
 //! OpenEXR files are made from).
