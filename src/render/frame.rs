@@ -606,9 +606,10 @@ fn trace_split(
 }
 
 // Applies IAA to a tile (or, for the other modes, counts its samples):
-// pixel-area tests, then the split pixels traced together at the fine
-// resolution (`fine`: the tracer of the 2^depth× image), with beams, their
-// other sub-samples masked out.
+// pixel-area tests (`beside`: the base samples around the tile, for the
+// shadow-edge rule), then the split pixels' sub-samples traced with beams
+// on `fine`'s images, square by square (`trace_split`): at 2^depth× for
+// most, at 2× for pixels split by shading alone.
 fn anti_alias(
     tr: &Tracer<'_>,
     fine: Option<&Fine<'_>>,
