@@ -616,7 +616,7 @@ impl Ctx<'_, '_> {
 // (convex in the origin) to the bounds is largest at a corner pair.
 fn far_t(corners: &CornerRays, bounds: &IBox) -> f64 {
     let mut far = 0.0f64;
-    for (o, _) in &corners.rays {
+    for (o, _) in corners.rays() {
         for cx in [bounds[0].lo, bounds[0].hi] {
             for cy in [bounds[1].lo, bounds[1].hi] {
                 for cz in [bounds[2].lo, bounds[2].hi] {

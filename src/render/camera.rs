@@ -290,8 +290,9 @@ fn bits(b: &IBox) -> [u64; 6] {
 /// Enclosures of the origin and direction of a block's four corner rays.
 #[derive(Copy, Clone, Debug)]
 pub struct CornerRays {
-    /// Origin and direction enclosures, corner by corner.
-    pub rays: [(IBox, IBox); 4],
+    // Origin and direction enclosures, corner by corner (private: `shape`
+    // is derived from them).
+    rays: [(IBox, IBox); 4],
     // What the corners share, found once: a block's hull is taken at
     // every piece of its sweep, and comparing the corners' bits there
     // cost more than the hull itself.
@@ -320,6 +321,11 @@ impl CornerRays {
             Shape::Neither
         };
         CornerRays { rays, shape }
+    }
+
+    /// Origin and direction enclosures, corner by corner.
+    pub fn rays(&self) -> &[(IBox, IBox); 4] {
+        &self.rays
     }
 
     /// A sound hull of the block's ray points for t ∈ `t`: the hull of the
