@@ -149,13 +149,19 @@ impl<'a> Frame<'a> {
         let all = tiles(self.opts.width, self.opts.height);
         let done = AtomicUsize::new(0);
         let mut outs = self.trace(&all);
-        let edges: Vec<TileEdges> = outs.iter().map(edges_of).collect();
+        // Only IAA's shadow-edge rule reads the tiles' sides.
+        let edges: Vec<TileEdges> = match self.aa {
+            Aa::Iaa { .. } => outs.iter().map(edges_of).collect(),
+            _ => Vec::new(),
+        };
         let cols = self.opts.width.div_ceil(TILE) as usize;
         let beside = |i: usize| Beside {
-            above: i.checked_sub(cols).map(|k| &edges[k]),
+            above: i.checked_sub(cols).and_then(|k| edges.get(k)),
             below: edges.get(i + cols),
-            left: (!i.is_multiple_of(cols)).then(|| &edges[i - 1]),
-            right: (i % cols + 1 < cols).then(|| &edges[i + 1]),
+            left: (!i.is_multiple_of(cols))
+                .then(|| edges.get(i - 1))
+                .flatten(),
+            right: (i % cols + 1 < cols).then(|| edges.get(i + 1)).flatten(),
         };
         self.anti_alias_tiles(&mut outs, beside, &done, all.len());
         if self.opts.progress && self.progress.is_none() {
@@ -215,14 +221,20 @@ impl<'a> Frame<'a> {
                             .get(r + 1)
                             .filter(|_| look_ahead)
                             .map(|&y| self.trace(&tile_row(w, h, y)));
-                        let edges: Vec<TileEdges> = outs.iter().map(edges_of).collect();
-                        let below: Vec<TileEdges> = next.iter().flatten().map(edges_of).collect();
-                        let n = outs.len();
+                        let sides = |row: &[TileOut]| -> Vec<TileEdges> {
+                            if look_ahead {
+                                row.iter().map(edges_of).collect()
+                            } else {
+                                Vec::new()
+                            }
+                        };
+                        let edges = sides(&outs);
+                        let below = next.as_deref().map(sides).unwrap_or_default();
                         let beside = |i: usize| Beside {
                             above: above.get(i),
                             below: below.get(i),
-                            left: i.checked_sub(1).map(|k| &edges[k]),
-                            right: (i + 1 < n).then(|| &edges[i + 1]),
+                            left: i.checked_sub(1).and_then(|k| edges.get(k)),
+                            right: edges.get(i + 1),
                         };
                         self.anti_alias_tiles(&mut outs, beside, &done, total);
                         (outs, next, edges)
