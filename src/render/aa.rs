@@ -44,8 +44,8 @@
 //! Shadows are not part of the colour interval (proving a shadow edge
 //! absent over a beam needs a shadow beam from a surface patch, which the
 //! surface itself obstructs). Instead a hit pixel whose base sample has
-//! another set of shadowed lights than a hit 4-neighbour's (in the same
-//! tile) is never smooth: shadow edges are split like silhouettes. This is
+//! another set of shadowed lights than a hit 4-neighbour's (in its tile
+//! or a tile beside) is never smooth: shadow edges are split like silhouettes. This is
 //! a sampling heuristic, not a proof: a shadow narrower than the pixel
 //! spacing can fall between base samples. Neighbours across a tile's
 //! border are read from the tiles beside it (the base render runs a row
