@@ -123,6 +123,9 @@ pub fn worker_main(spec: &WorkerSpec) -> i32 {
                 serde_json::json!({
                     "time_ms": r.stats.time_ms,
                     "compile_ms": r.stats.compile_ms,
+                    "output_ms": r.stats.output_ms,
+                    "trace_cpu_ms": r.stats.trace_cpu_ms,
+                    "shade_cpu_ms": r.stats.shade_cpu_ms,
                     "hit": r.stats.pixels_hit,
                 })
                 .to_string()

@@ -6,10 +6,10 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-use image::Rgb;
 use rayon::prelude::*;
 
 use super::aa::{self, Aa, AaError, Beside, TileEdges};
+use super::assemble::assemble;
 use super::band::{Band, FloatLayers, band};
 use super::camera::{self, RayCamera};
 use super::stats::RenderStats;
@@ -167,7 +167,9 @@ impl<'a> Frame<'a> {
         if self.opts.progress && self.progress.is_none() {
             eprintln!();
         }
-        let mut out = assemble(&outs, &self.opts, self.bg, self.depth_range);
+        let mut out = self
+            .pool
+            .install(|| assemble(&outs, &self.opts, self.depth_range));
         drop(outs);
         self.finish_times(&mut out.stats);
         out
@@ -412,74 +414,6 @@ fn tile_row(w: u32, h: u32, y0: u32) -> Vec<(u32, u32, u32, u32)> {
         .step_by(TILE as usize)
         .map(|x0| (x0, y0, TILE.min(w - x0), TILE.min(h - y0)))
         .collect()
-}
-
-// The render's images and counters from its tiles, in tile order (times
-// other than the output's own are left to the caller).
-fn assemble(
-    outs: &[TileOut],
-    opts: &RenderOptions,
-    bg_linear: [f64; 3],
-    depth_range: (f64, f64),
-) -> RenderOutput {
-    let out_start = Instant::now();
-    let (w, h) = (opts.width, opts.height);
-    let npx = (w as usize) * (h as usize);
-    let mut stats = RenderStats {
-        width: w,
-        height: h,
-        ..RenderStats::default()
-    };
-    let mut color = vec![output::srgb_pixel(bg_linear); npx];
-    let mut linear = vec![bg_linear; npx];
-    let mut coverage = vec![0.0; npx];
-    let mut samples = vec![1u32; npx];
-    let mut hit_mask = vec![false; npx];
-    let mut depth_t = vec![f64::INFINITY; npx];
-    let mut normals = opts.want_normals.then(|| vec![Rgb([0u8; 3]); npx]);
-    let mut class = opts.want_classify.then(|| vec![Rgb([0u8; 3]); npx]);
-    let mut srgb = output::SrgbRun::default();
-    for t in outs {
-        stats.merge(&t.state.stats);
-        for j in 0..t.h {
-            for i in 0..t.w {
-                let src = (j * t.w + i) as usize;
-                let dst = ((t.y0 + j) as usize) * (w as usize) + (t.x0 + i) as usize;
-                color[dst] = srgb.pixel(t.linear[src]);
-                linear[dst] = t.linear[src];
-                coverage[dst] = t.coverage[src];
-                samples[dst] = t.samples[src];
-                depth_t[dst] = t.depth[src];
-                hit_mask[dst] = t.depth[src].is_finite();
-                if let (Some(n), Some(tn)) = (normals.as_mut(), t.normals.as_ref()) {
-                    n[dst] = output::normal_or_none(tn[src]);
-                }
-                if let (Some(c), Some(tc)) = (class.as_mut(), t.class.as_ref()) {
-                    c[dst] = tc[src];
-                }
-            }
-        }
-    }
-    stats.pixels_hit = hit_mask.iter().filter(|&&m| m).count() as u64;
-    let image = output::rgb_image(w, h, &color);
-    let depth = opts
-        .want_depth
-        .then(|| output::depth_image(w, h, &depth_t, depth_range));
-    let normals = normals.map(|px| output::rgb_image(w, h, &px));
-    let classify = class.map(|px| output::rgb_image(w, h, &px));
-    stats.output_ms = ms_since(out_start);
-    RenderOutput {
-        image,
-        depth,
-        normals,
-        classify,
-        hit_mask,
-        depth_t,
-        linear,
-        coverage,
-        samples,
-        stats,
-    }
 }
 
 // The base samples along a tile's sides, before its anti-aliasing.

@@ -40,6 +40,7 @@
 //! OpenEXR files are made from).
 
 pub mod aa;
+mod assemble;
 mod band;
 pub mod beam;
 pub mod camera;
