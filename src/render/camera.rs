@@ -358,6 +358,30 @@ impl CornerRays {
         out
     }
 
+    /// A ray-parameter range holding the slab range ([`PixelRay::slab`]) of
+    /// every ray of the block that meets `b`, from the hulls of the corner
+    /// origins and directions; `None` where no axis bounds it (every axis
+    /// has a direction that may be 0). Only ever too wide: the interval
+    /// quotients hold every ray's per-axis entry and exit, and the result
+    /// is padded well beyond `slab`'s own padding.
+    pub fn slab_range(&self, b: &crate::scene::Bounds) -> Option<Interval> {
+        let (o, d) = (self.origins(), self.directions());
+        let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+        for i in 0..3 {
+            if d[i].lo <= 0.0 && d[i].hi >= 0.0 {
+                continue;
+            }
+            let a = Interval::point(b.min[i]).sub(o[i]).div(d[i]);
+            let c = Interval::point(b.max[i]).sub(o[i]).div(d[i]);
+            // Each ray enters at the smaller of its two quotients and
+            // leaves at the larger.
+            let (enter, leave) = (a.lo.min(c.lo), a.hi.max(c.hi));
+            t0 = t0.max(enter - 1e3 * SLAB_PAD * (1.0 + enter.abs()));
+            t1 = t1.min(leave + 1e3 * SLAB_PAD * (1.0 + leave.abs()));
+        }
+        (t0 <= t1 && t1.is_finite()).then(|| Interval::new(t0, t1))
+    }
+
     /// A sound hull of the block's ray origins (affine in screen position,
     /// like the directions).
     pub fn origins(&self) -> IBox {
@@ -473,6 +497,44 @@ mod tests {
         // Both cameras' blocks take the shortcut (parallel rays share a
         // direction, a pinhole's an origin).
         assert!(shortcuts > 5000, "{shortcuts} of 6000");
+    }
+
+    #[test]
+    fn a_blocks_slab_range_holds_every_pixels_slab() {
+        let mut rng = crate::ir::random::Rng::new(11);
+        let perspective = Camera {
+            eye: [0.5, -3.0, 2.0],
+            ..Camera::default()
+        };
+        let bounds = crate::scene::Bounds {
+            min: [-1.0, -0.5, -2.0],
+            max: [1.5, 0.75, 0.25],
+        };
+        let (mut blocks, mut pixels) = (0, 0);
+        for cam in cams().into_iter().chain([perspective]) {
+            let rc = RayCamera::new(&cam, 96, 64).unwrap();
+            for _ in 0..300 {
+                let (x0, y0) = (rng.below(90) as u32, rng.below(60) as u32);
+                let (x1, y1) = (x0 + 1 + rng.below(32) as u32, y0 + 1 + rng.below(32) as u32);
+                let c = rc.corners(
+                    (f64::from(x0) + 0.5, f64::from(x1) - 0.5),
+                    (f64::from(y0) + 0.5, f64::from(y1) - 0.5),
+                );
+                let range = c.slab_range(&bounds);
+                blocks += usize::from(range.is_some());
+                for (i, j) in (x0..x1).flat_map(|i| (y0..y1).map(move |j| (i, j))) {
+                    if let Some((a, b)) = rc.pixel_ray(i, j).slab(&bounds) {
+                        let r = range.expect("a block with a pixel in the bounds has a range");
+                        assert!(r.lo <= a && b <= r.hi, "{r:?} misses ({a}, {b})");
+                        pixels += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            blocks > 300 && pixels > 10_000,
+            "{blocks} blocks, {pixels} pixels"
+        );
     }
 
     #[test]
