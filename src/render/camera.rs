@@ -358,28 +358,28 @@ impl CornerRays {
         out
     }
 
-    /// A ray-parameter range holding the slab range ([`PixelRay::slab`]) of
-    /// every ray of the block that meets `b`, from the hulls of the corner
-    /// origins and directions; `None` where no axis bounds it (every axis
-    /// has a direction that may be 0). Only ever too wide: the interval
-    /// quotients hold every ray's per-axis entry and exit, and the result
-    /// is padded well beyond `slab`'s own padding.
+    /// An interval of the ray parameter holding every t at which a ray of
+    /// the block is inside `b` (each ray's clipped range, as
+    /// [`PixelRay::slab`] computes it, lies inside it, with a relative
+    /// margin for that computation's rounding); `None` when no ray of the
+    /// block meets `b`, or no finite range holds them (every axis has a
+    /// direction that may be 0).
     pub fn slab_range(&self, b: &crate::scene::Bounds) -> Option<Interval> {
         let (o, d) = (self.origins(), self.directions());
-        let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+        let mut t = Interval::new(0.0, f64::INFINITY);
         for i in 0..3 {
+            // An axis along which some direction is zero bounds nothing.
             if d[i].lo <= 0.0 && d[i].hi >= 0.0 {
                 continue;
             }
-            let a = Interval::point(b.min[i]).sub(o[i]).div(d[i]);
-            let c = Interval::point(b.max[i]).sub(o[i]).div(d[i]);
-            // Each ray enters at the smaller of its two quotients and
-            // leaves at the larger.
-            let (enter, leave) = (a.lo.min(c.lo), a.hi.max(c.hi));
-            t0 = t0.max(enter - 1e3 * SLAB_PAD * (1.0 + enter.abs()));
-            t1 = t1.min(leave + 1e3 * SLAB_PAD * (1.0 + leave.abs()));
+            let along = Interval::new(b.min[i], b.max[i]).sub(o[i]).div(d[i]);
+            t = Interval::new(t.lo.max(along.lo), t.hi.min(along.hi));
         }
-        (t0 <= t1 && t1.is_finite()).then(|| Interval::new(t0, t1))
+        // `slab` pads each pixel's range by `SLAB_PAD` relative; twice that,
+        // plus the margin for its rounding.
+        let pad = |v: f64| 2.0 * SLAB_PAD * (1.0 + v.abs()) + 1e-9 * (t.hi - t.lo);
+        let t = Interval::new((t.lo - pad(t.lo)).max(0.0), t.hi + pad(t.hi));
+        (t.lo <= t.hi && t.hi.is_finite()).then_some(t)
     }
 
     /// A sound hull of the block's ray origins (affine in screen position,

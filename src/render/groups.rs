@@ -17,7 +17,6 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
 use super::TILE;
-use super::camera::SLAB_PAD;
 use super::tracer::{PrunedEvals, TileState, Tracer};
 use crate::eval::Evaluator;
 use crate::eval::regional::Regional;
@@ -85,29 +84,10 @@ fn build(tr: &Tracer<'_>, (gx, gy): (u32, u32), st: &mut TileState) -> Group {
     Some((evals, region))
 }
 
-// An interval of the ray parameter holding every t at which a ray of the
-// beam through the pixel centres `xs × ys` is inside the bounds (each
-// pixel's clipped range, as `PixelRay::slab` computes it, lies inside
-// it, with a relative margin for that computation's rounding); `None`
-// when no ray of the beam meets the bounds, or no finite range holds them.
+// `CornerRays::slab_range` of the beam through the pixel centres
+// `xs × ys`.
 fn beam_range(tr: &Tracer<'_>, xs: (f64, f64), ys: (f64, f64)) -> Option<Interval> {
-    let corners = tr.cam.corners(xs, ys);
-    let (o, d) = (corners.origins(), corners.directions());
-    let b = tr.bounds;
-    let mut t = Interval::new(0.0, f64::INFINITY);
-    for i in 0..3 {
-        // An axis along which some direction is zero bounds nothing.
-        if d[i].lo <= 0.0 && d[i].hi >= 0.0 {
-            continue;
-        }
-        let along = Interval::new(b.min[i], b.max[i]).sub(o[i]).div(d[i]);
-        t = Interval::new(t.lo.max(along.lo), t.hi.min(along.hi));
-    }
-    // `slab` pads each pixel's range by `SLAB_PAD` relative; twice that,
-    // plus the margin for its rounding.
-    let pad = |v: f64| 2.0 * SLAB_PAD * (1.0 + v.abs()) + 1e-9 * (t.hi - t.lo);
-    let t = Interval::new((t.lo - pad(t.lo)).max(0.0), t.hi + pad(t.hi));
-    (t.lo <= t.hi && t.hi.is_finite()).then_some(t)
+    tr.cam.corners(xs, ys).slab_range(&tr.bounds)
 }
 
 /// Object evaluators pruned to a group's region.

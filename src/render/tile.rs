@@ -152,20 +152,23 @@ pub(crate) fn render_tile(
 
 /// Functions with at most this many live ops in all are tested over a
 /// whole tile's beam before its pixels' rays are built: one interval of
-/// each costs less than building the rays of a tile that turns out empty.
-/// Longer ones are pruned to the tile's beam first (`prune_to_tile`), and
-/// their tiles are seldom empty.
+/// each costs less than building the rays of a tile that turns out empty
+/// (100 spheres, 1400 ops, 1.2x faster). Longer functions keep the
+/// regular path: testing prospero's tiles on their groups' pruned tapes
+/// made its render 1.4x slower.
 const EMPTY_TILE_MAX_OPS: usize = 4096;
 
 // Whether the beam tracer would settle every pixel of the tile as
 // background: every object strictly positive, or undefined, over the hull
 // of the tile's beam over a range that holds every pixel's slab. Each box
 // the beam tests would evaluate lies inside that hull, and interval
-// arithmetic is inclusion-isotone, so they would all reject too: the
-// pixels are the same as tracing gives (no classification is asked for,
-// which tells rays outside the bounds from rejected ones, and no pixel is
-// masked or starts at a floor of its own). Per-pixel rays, slabs and
-// shading were most of a sparse scene's time (10 spheres at 1024²).
+// arithmetic is inclusion-isotone (a tape pruned to a region gives, over
+// a box inside it, an interval inside the whole function's over any box
+// holding that one), so they would all reject too: the pixels are the
+// same as tracing gives (no classification is asked for, which tells rays
+// outside the bounds from rejected ones, and no pixel is masked or starts
+// at a floor of its own). Per-pixel rays, slabs and shading were most of
+// a sparse scene's time.
 fn proven_empty(
     tr: &Tracer<'_>,
     opts: &RenderOptions,
