@@ -38,6 +38,8 @@ use crate::ir::{BinaryOp, Function, Op, UnaryOp, ValueId, Var};
 
 mod run;
 
+use run::{Registers, fixed_registers};
+
 /// A register index.
 pub type Reg = u32;
 
@@ -261,58 +263,26 @@ impl Tape {
     ) -> Option<PrunedTape> {
         let ops = &self.ssa.ops;
         let n = ops.len();
-        // Values and facts live in registers, as in evaluation: a few dozen
-        // slots, not one per op.
-        let regs = &mut ws.intervals;
-        regs.clear();
-        regs.resize(self.registers, Interval::point(0.0));
-        let fact = &mut ws.facts;
-        fact.clear();
-        fact.resize(self.registers, Facts::default());
         // alias[k]: the op whose value op k always equals on the box.
         let alias = &mut ws.alias;
         alias.clear();
         alias.extend(0..n);
-        let mut decided = 0;
-        // One dispatch per instruction: each common op's arm calls the
-        // shared rules with its op fixed, which inlining specialises (a
-        // dispatch on the form, then on the op inside each rule, costs
-        // several mispredicted branches per op).
-        for (k, instr) in self.code.iter().enumerate() {
-            let at = |r: Reg| (regs[r as usize], fact[r as usize]);
-            let (out, v, f, pick) = match *instr {
-                Instr::Var(o, var) => {
-                    let v = b[var.index()];
-                    (o, v, var_facts(v), None)
-                }
-                Instr::Const(o, c) => (o, Interval::point(c), const_facts(c), None),
-                Instr::Add(o, x, y) => binary(o, BinaryOp::Add, at(x), at(y), Interval::add),
-                Instr::Sub(o, x, y) => binary(o, BinaryOp::Sub, at(x), at(y), Interval::sub),
-                Instr::Mul(o, x, y) => binary(o, BinaryOp::Mul, at(x), at(y), Interval::mul),
-                Instr::Min(o, x, y) => binary(o, BinaryOp::Min, at(x), at(y), Interval::min),
-                Instr::Max(o, x, y) => binary(o, BinaryOp::Max, at(x), at(y), Interval::max),
-                Instr::Binary(o, op, x, y) => {
-                    binary(o, op, at(x), at(y), |p, q| interval_binary_inline(op, p, q))
-                }
-                Instr::Neg(o, x) => unary(o, UnaryOp::Neg, at(x), Interval::neg),
-                Instr::Square(o, x) => unary(o, UnaryOp::Square, at(x), Interval::square),
-                Instr::Sqrt(o, x) => unary(o, UnaryOp::Sqrt, at(x), Interval::sqrt),
-                Instr::Unary(o, u, x) => unary(o, u, at(x), |p| interval_unary_inline(u, p)),
-                Instr::Powi(o, x, p) => {
-                    let x = at(x);
-                    let v = x.0.powi(p);
-                    (o, v, powi_facts(p, x, v), None)
-                }
-            };
-            if let Some(w) = pick
-                && let Op::Binary(_, xa, ya) = ops[k]
-            {
-                alias[k] = alias[[xa, ya][w].index()];
-                decided += 1;
-            }
-            regs[out as usize] = v;
-            fact[out as usize] = f;
-        }
+        // Values and facts live in registers, as in evaluation: a few dozen
+        // slots, not one per op.
+        let zero = Interval::point(0.0);
+        let decided = match (
+            fixed_registers(&mut ws.intervals, self.registers, zero),
+            fixed_registers(&mut ws.facts, self.registers, Facts::default()),
+        ) {
+            (Some(regs), Some(fact)) => prune_pass(&self.code, ops, b, (regs, fact), alias),
+            _ => prune_pass(
+                &self.code,
+                ops,
+                b,
+                (&mut ws.intervals[..], &mut ws.facts[..]),
+                alias,
+            ),
+        };
         if decided == 0 {
             return None;
         }
@@ -470,6 +440,60 @@ fn depth_first(f: &Function) -> Vec<usize> {
         }
     }
     order
+}
+
+/// Pruning's forward pass over `code` (the instructions of `ops`) with
+/// register files for values and facts: records in `alias` each decided
+/// `min`/`max` and returns how many were decided.
+#[inline(always)]
+fn prune_pass<V: Registers<Interval> + ?Sized, F: Registers<Facts> + ?Sized>(
+    code: &[Instr],
+    ops: &[Op],
+    b: [Interval; 3],
+    (regs, fact): (&mut V, &mut F),
+    alias: &mut [usize],
+) -> usize {
+    let mut decided = 0;
+    // One dispatch per instruction: each common op's arm calls the
+    // shared rules with its op fixed, which inlining specialises (a
+    // dispatch on the form, then on the op inside each rule, costs
+    // several mispredicted branches per op).
+    for (k, instr) in code.iter().enumerate() {
+        let at = |r: Reg| (regs.get(r), fact.get(r));
+        let (out, v, f, pick) = match *instr {
+            Instr::Var(o, var) => {
+                let v = b[var.index()];
+                (o, v, var_facts(v), None)
+            }
+            Instr::Const(o, c) => (o, Interval::point(c), const_facts(c), None),
+            Instr::Add(o, x, y) => binary(o, BinaryOp::Add, at(x), at(y), Interval::add),
+            Instr::Sub(o, x, y) => binary(o, BinaryOp::Sub, at(x), at(y), Interval::sub),
+            Instr::Mul(o, x, y) => binary(o, BinaryOp::Mul, at(x), at(y), Interval::mul),
+            Instr::Min(o, x, y) => binary(o, BinaryOp::Min, at(x), at(y), Interval::min),
+            Instr::Max(o, x, y) => binary(o, BinaryOp::Max, at(x), at(y), Interval::max),
+            Instr::Binary(o, op, x, y) => {
+                binary(o, op, at(x), at(y), |p, q| interval_binary_inline(op, p, q))
+            }
+            Instr::Neg(o, x) => unary(o, UnaryOp::Neg, at(x), Interval::neg),
+            Instr::Square(o, x) => unary(o, UnaryOp::Square, at(x), Interval::square),
+            Instr::Sqrt(o, x) => unary(o, UnaryOp::Sqrt, at(x), Interval::sqrt),
+            Instr::Unary(o, u, x) => unary(o, u, at(x), |p| interval_unary_inline(u, p)),
+            Instr::Powi(o, x, p) => {
+                let x = at(x);
+                let v = x.0.powi(p);
+                (o, v, powi_facts(p, x, v), None)
+            }
+        };
+        if let Some(w) = pick
+            && let Op::Binary(_, xa, ya) = ops[k]
+        {
+            alias[k] = alias[[xa, ya][w].index()];
+            decided += 1;
+        }
+        regs.set(out, v);
+        fact.set(out, f);
+    }
+    decided
 }
 
 /// One step of pruning's forward pass over `u(x)` written to `o`: its

@@ -20,57 +20,22 @@ impl Tape {
     /// (the reference rules' `match` per op, a call each, costs more than
     /// the op).
     pub fn point(&self, p: [f64; 3], ws: &mut Workspace) -> f64 {
-        let m = &mut ws.points;
-        m.clear();
-        m.resize(self.registers, 0.0);
-        for instr in &self.code {
-            let r = |a: Reg| m[a as usize];
-            let (o, v) = match *instr {
-                Instr::Var(o, v) => (o, p[v.index()]),
-                Instr::Const(o, c) => (o, c),
-                Instr::Add(o, a, b) => (o, r(a) + r(b)),
-                Instr::Sub(o, a, b) => (o, r(a) - r(b)),
-                Instr::Mul(o, a, b) => (o, r(a) * r(b)),
-                Instr::Min(o, a, b) => (o, point_binary(BinaryOp::Min, r(a), r(b))),
-                Instr::Max(o, a, b) => (o, point_binary(BinaryOp::Max, r(a), r(b))),
-                Instr::Neg(o, a) => (o, -r(a)),
-                Instr::Square(o, a) => (o, r(a) * r(a)),
-                Instr::Sqrt(o, a) => (o, r(a).sqrt()),
-                Instr::Unary(o, op, a) => (o, point_unary(op, r(a))),
-                Instr::Binary(o, op, a, b) => (o, point_binary(op, r(a), r(b))),
-                Instr::Powi(o, a, k) => (o, point_powi(r(a), k)),
-            };
-            m[o as usize] = v;
+        let root = self.root_reg() as Reg;
+        match fixed_registers(&mut ws.points, self.registers, 0.0) {
+            Some(m) => point_pass(&self.code, p, m, root),
+            None => point_pass(&self.code, p, &mut ws.points[..], root),
         }
-        m[self.root_reg()]
     }
 
     /// An interval containing f over `b`, the same bits as the reference
     /// interpreter's (see [`Tape::point`]).
     pub fn interval(&self, b: [Interval; 3], ws: &mut Workspace) -> Interval {
-        let m = &mut ws.intervals;
-        m.clear();
-        m.resize(self.registers, Interval::point(0.0));
-        for instr in &self.code {
-            let r = |a: Reg| m[a as usize];
-            let (o, v) = match *instr {
-                Instr::Var(o, v) => (o, b[v.index()]),
-                Instr::Const(o, c) => (o, Interval::point(c)),
-                Instr::Add(o, a, b) => (o, r(a).add(r(b))),
-                Instr::Sub(o, a, b) => (o, r(a).sub(r(b))),
-                Instr::Mul(o, a, b) => (o, r(a).mul(r(b))),
-                Instr::Min(o, a, b) => (o, r(a).min(r(b))),
-                Instr::Max(o, a, b) => (o, r(a).max(r(b))),
-                Instr::Neg(o, a) => (o, r(a).neg()),
-                Instr::Square(o, a) => (o, r(a).square()),
-                Instr::Sqrt(o, a) => (o, r(a).sqrt()),
-                Instr::Unary(o, op, a) => (o, interval_unary(op, r(a))),
-                Instr::Binary(o, op, a, b) => (o, interval_binary(op, r(a), r(b))),
-                Instr::Powi(o, a, k) => (o, r(a).powi(k)),
-            };
-            m[o as usize] = v;
+        let root = self.root_reg() as Reg;
+        let zero = Interval::point(0.0);
+        match fixed_registers(&mut ws.intervals, self.registers, zero) {
+            Some(m) => interval_pass(&self.code, b, m, root),
+            None => interval_pass(&self.code, b, &mut ws.intervals[..], root),
         }
-        m[self.root_reg()]
     }
 
     /// f and its gradient at `p`, the same bits as the reference
@@ -230,6 +195,126 @@ impl Tape {
         let r = self.root_reg() * n;
         out.copy_from_slice(&m[r..r + n]);
     }
+}
+
+/// Tapes with at most this many registers run on a fixed-size register
+/// file indexed modulo its size, which the compiler proves in bounds: no
+/// bounds check per operand (a tape's registers lie below its count, so
+/// the modulo never wraps). Longer tapes run on a slice.
+const FIXED_REGISTERS: usize = 256;
+
+/// A register file: one value per register.
+pub(super) trait Registers<T: Copy> {
+    /// Register `r`'s value.
+    fn get(&self, r: Reg) -> T;
+    /// Sets register `r`.
+    fn set(&mut self, r: Reg, v: T);
+}
+
+impl<T: Copy> Registers<T> for [T; FIXED_REGISTERS] {
+    #[inline(always)]
+    fn get(&self, r: Reg) -> T {
+        self[r as usize % FIXED_REGISTERS]
+    }
+    #[inline(always)]
+    fn set(&mut self, r: Reg, v: T) {
+        self[r as usize % FIXED_REGISTERS] = v;
+    }
+}
+
+impl<T: Copy> Registers<T> for [T] {
+    #[inline(always)]
+    fn get(&self, r: Reg) -> T {
+        self[r as usize]
+    }
+    #[inline(always)]
+    fn set(&mut self, r: Reg, v: T) {
+        self[r as usize] = v;
+    }
+}
+
+/// `m` as a fixed register file when `registers` fit one; otherwise `m`
+/// is made `registers` long and `None` comes back. Registers are written
+/// before they are read (a tape defines each value before its uses), so
+/// what earlier runs left in `m` is never seen.
+pub(super) fn fixed_registers<T: Copy>(
+    m: &mut Vec<T>,
+    registers: usize,
+    zero: T,
+) -> Option<&mut [T; FIXED_REGISTERS]> {
+    let len = if registers <= FIXED_REGISTERS {
+        FIXED_REGISTERS
+    } else {
+        registers
+    };
+    if m.len() < len {
+        m.resize(len, zero);
+    }
+    (registers <= FIXED_REGISTERS).then(|| {
+        (&mut m[..FIXED_REGISTERS])
+            .try_into()
+            .expect("a slice of FIXED_REGISTERS")
+    })
+}
+
+/// [`Tape::point`]'s pass over `code` with register file `m`.
+#[inline(always)]
+fn point_pass<M: Registers<f64> + ?Sized>(
+    code: &[Instr],
+    p: [f64; 3],
+    m: &mut M,
+    root: Reg,
+) -> f64 {
+    for instr in code {
+        let r = |a: Reg| m.get(a);
+        let (o, v) = match *instr {
+            Instr::Var(o, v) => (o, p[v.index()]),
+            Instr::Const(o, c) => (o, c),
+            Instr::Add(o, a, b) => (o, r(a) + r(b)),
+            Instr::Sub(o, a, b) => (o, r(a) - r(b)),
+            Instr::Mul(o, a, b) => (o, r(a) * r(b)),
+            Instr::Min(o, a, b) => (o, point_binary(BinaryOp::Min, r(a), r(b))),
+            Instr::Max(o, a, b) => (o, point_binary(BinaryOp::Max, r(a), r(b))),
+            Instr::Neg(o, a) => (o, -r(a)),
+            Instr::Square(o, a) => (o, r(a) * r(a)),
+            Instr::Sqrt(o, a) => (o, r(a).sqrt()),
+            Instr::Unary(o, op, a) => (o, point_unary(op, r(a))),
+            Instr::Binary(o, op, a, b) => (o, point_binary(op, r(a), r(b))),
+            Instr::Powi(o, a, k) => (o, point_powi(r(a), k)),
+        };
+        m.set(o, v);
+    }
+    m.get(root)
+}
+
+/// [`Tape::interval`]'s pass over `code` with register file `m`.
+#[inline(always)]
+fn interval_pass<M: Registers<Interval> + ?Sized>(
+    code: &[Instr],
+    b: [Interval; 3],
+    m: &mut M,
+    root: Reg,
+) -> Interval {
+    for instr in code {
+        let r = |a: Reg| m.get(a);
+        let (o, v) = match *instr {
+            Instr::Var(o, v) => (o, b[v.index()]),
+            Instr::Const(o, c) => (o, Interval::point(c)),
+            Instr::Add(o, a, b) => (o, r(a).add(r(b))),
+            Instr::Sub(o, a, b) => (o, r(a).sub(r(b))),
+            Instr::Mul(o, a, b) => (o, r(a).mul(r(b))),
+            Instr::Min(o, a, b) => (o, r(a).min(r(b))),
+            Instr::Max(o, a, b) => (o, r(a).max(r(b))),
+            Instr::Neg(o, a) => (o, r(a).neg()),
+            Instr::Square(o, a) => (o, r(a).square()),
+            Instr::Sqrt(o, a) => (o, r(a).sqrt()),
+            Instr::Unary(o, op, a) => (o, interval_unary(op, r(a))),
+            Instr::Binary(o, op, a, b) => (o, interval_binary(op, r(a), r(b))),
+            Instr::Powi(o, a, k) => (o, r(a).powi(k)),
+        };
+        m.set(o, v);
+    }
+    m.get(root)
 }
 
 /// `out[i] = f(a[i])` over equal-length columns, a loop the compiler

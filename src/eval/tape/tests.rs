@@ -195,3 +195,57 @@ fn pruned_random_functions_keep_their_bits_in_the_box() {
     }
     assert!(pruned > 20, "only {pruned} random functions pruned");
 }
+
+// A function whose tape keeps `n` values alive at once: each
+// `x·y + c_i` joins a sum and, after all of them, a max, so every one
+// waits in a register from the sum to the max.
+fn wide(n: usize) -> Function {
+    let mut b = crate::ir::Builder::new();
+    let (x, y) = (b.var(Var::X), b.var(Var::Y));
+    let xy = b.binary(BinaryOp::Mul, x, y);
+    let terms: Vec<ValueId> = (0..n)
+        .map(|i| {
+            let c = b.constant(0.37 * i as f64 - 11.0);
+            b.binary(BinaryOp::Add, xy, c)
+        })
+        .collect();
+    let sum = terms[1..]
+        .iter()
+        .fold(terms[0], |s, &t| b.binary(BinaryOp::Add, s, t));
+    let max = terms[1..]
+        .iter()
+        .rev()
+        .fold(terms[0], |m, &t| b.binary(BinaryOp::Max, m, t));
+    let root = b.binary(BinaryOp::Sub, max, sum);
+    b.finish(root)
+}
+
+#[test]
+fn tapes_past_the_fixed_register_file_give_the_interpreters_bits() {
+    let mut rng = Rng::new(29);
+    let mut ws = Workspace::default();
+    // A short tape first, so the workspace holds stale fixed registers
+    // when the long one runs, and the other way round.
+    for n in [3, 400, 5, 300] {
+        let f = wide(n);
+        let tape = Tape::new(&f);
+        let it = Interpreter::new(f);
+        if n >= 300 {
+            assert!(tape.registers() > 256, "{} registers", tape.registers());
+        }
+        for _ in 0..16 {
+            let p: [f64; 3] = std::array::from_fn(|_| rng.range(-3.0, 3.0));
+            assert!(same(tape.point(p, &mut ws), it.point(p)), "n {n} at {p:?}");
+            let b = random_box(&mut rng, 3.0);
+            assert!(
+                same_iv(tape.interval(b, &mut ws), it.interval(b)),
+                "n {n} over {b:?}"
+            );
+            let small = random_box(&mut rng, 0.05);
+            if let Some(pruned) = tape.prune(small, &mut ws) {
+                let q: [f64; 3] = std::array::from_fn(|k| small[k].mid());
+                assert!(same(pruned.tape.point(q, &mut ws), it.point(q)), "n {n}");
+            }
+        }
+    }
+}
