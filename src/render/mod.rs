@@ -54,6 +54,7 @@ mod refine;
 pub mod shade;
 mod slices;
 pub mod stats;
+mod subsample;
 mod tile;
 mod tracer;
 

@@ -1,0 +1,140 @@
+//! Tiles traced at a finer resolution and averaged back: `grid:N`'s
+//! samples, and IAA's sub-samples of split pixels, traced square by square
+//! of the pixels that need them.
+
+use rayon::prelude::*;
+
+use super::RenderOptions;
+use super::stats::RenderStats;
+use super::tile::{TileOut, TileSpec, render_tile};
+use super::tracer::Tracer;
+
+// Averages each s×s block of a tile traced at s× resolution, in linear
+// light. Depth: the nearest hit; normals and classes: the sample at
+// (s/2, s/2) of the block.
+pub(super) fn downsample(t: TileOut, s: u32) -> TileOut {
+    let (w, h) = (t.w / s, t.h / s);
+    let n = (w * h) as usize;
+    let inv = 1.0 / f64::from(s * s);
+    let mut linear = vec![[0.0; 3]; n];
+    let mut coverage = vec![0.0; n];
+    let mut depth = vec![f64::INFINITY; n];
+    fn pick<T: Copy>(v: &[T], (w, h, s, tw): (u32, u32, u32, u32)) -> Vec<T> {
+        (0..h)
+            .flat_map(|j| (0..w).map(move |i| (i, j)))
+            .map(|(i, j)| v[((j * s + s / 2) * tw + i * s + s / 2) as usize])
+            .collect()
+    }
+    let dims = (w, h, s, t.w);
+    for j in 0..h {
+        for i in 0..w {
+            let k = (j * w + i) as usize;
+            for sj in 0..s {
+                for si in 0..s {
+                    let src = ((j * s + sj) * t.w + i * s + si) as usize;
+                    for (l, v) in linear[k].iter_mut().zip(t.linear[src]) {
+                        *l += v * inv;
+                    }
+                    if t.depth[src].is_finite() {
+                        coverage[k] += inv;
+                        depth[k] = depth[k].min(t.depth[src]);
+                    }
+                }
+            }
+        }
+    }
+    TileOut {
+        x0: t.x0 / s,
+        y0: t.y0 / s,
+        w,
+        h,
+        linear,
+        // Anti-aliasing on a supersampled image never reads this.
+        shadowed: vec![0; n],
+        coverage,
+        samples: vec![s * s; n],
+        depth,
+        normals: t.normals.as_deref().map(|v| pick(v, dims)),
+        class: t.class.as_deref().map(|v| pick(v, dims)),
+        state: t.state,
+    }
+}
+
+/// Side, in pixels, of the squares of a tile whose split pixels are traced
+/// together at the fine resolution. A fine tile spans only squares that
+/// hold a split pixel: building, clipping and sweeping the sub-samples of
+/// a whole tile cost more than tracing its few split pixels.
+const FINE_GROUP: u32 = 2;
+
+// The sub-samples of a tile's split pixels (`split`, with the ray
+// parameter each pixel's area was proven empty up to in `floors`),
+// traced with `fine` at `f`× the resolution, square by square of
+// `FINE_GROUP` pixels, other sub-samples masked out: per pixel of the
+// tile (`area`: x0, y0, w, h) the mean linear colour, covered fraction
+// and nearest hit of its sub-samples (zero, zero, +inf where not split).
+pub(super) fn trace_split(
+    fine: &Tracer<'_>,
+    opts: &RenderOptions,
+    (x0, y0, w, h): (u32, u32, u32, u32),
+    (split, floors): (&[bool], &[f64]),
+    f: u32,
+    bg: [f64; 3],
+    stats: &mut RenderStats,
+) -> (Vec<[f64; 3]>, Vec<f64>, Vec<f64>) {
+    let n = (w * h) as usize;
+    let mut linear = vec![[0.0; 3]; n];
+    let mut coverage = vec![0.0; n];
+    let mut depth = vec![f64::INFINITY; n];
+    let fine_opts = RenderOptions {
+        want_depth: false,
+        want_normals: false,
+        want_classify: false,
+        progress: false,
+        ..opts.clone()
+    };
+    let squares: Vec<(u32, u32)> = (0..h)
+        .step_by(FINE_GROUP as usize)
+        .flat_map(|gy| (0..w).step_by(FINE_GROUP as usize).map(move |gx| (gx, gy)))
+        .collect();
+    let in_tile = |(gx, gy): (u32, u32), (i, j): (u32, u32)| ((gy + j) * w + gx + i) as usize;
+    let pixels = |(gx, gy): (u32, u32)| {
+        let (gw, gh) = (FINE_GROUP.min(w - gx), FINE_GROUP.min(h - gy));
+        (0..gh).flat_map(move |j| (0..gw).map(move |i| (i, j)))
+    };
+    // The squares are traced in parallel: a tile's split pixels can be
+    // most of a render's work (a silhouette crossing few tiles), more than
+    // one thread should carry.
+    let outs: Vec<((u32, u32), TileOut)> = squares
+        .par_iter()
+        .filter(|&&g| pixels(g).any(|p| split[in_tile(g, p)]))
+        .map(|&g| {
+            let (gw, gh) = (FINE_GROUP.min(w - g.0), FINE_GROUP.min(h - g.1));
+            let (fw, fh) = (gw * f, gh * f);
+            let pixel = |k: usize| in_tile(g, ((k as u32 % fw) / f, (k as u32 / fw) / f));
+            let nf = (fw * fh) as usize;
+            let mask: Vec<bool> = (0..nf).map(|k| split[pixel(k)]).collect();
+            // Each sub-sample starts where its pixel's area was proven
+            // empty up to: the fine render need not sweep that prefix again.
+            let starts: Vec<f64> = (0..nf).map(|k| floors[pixel(k)]).collect();
+            let spec = TileSpec {
+                x0: (x0 + g.0) * f,
+                y0: (y0 + g.1) * f,
+                w: fw,
+                h: fh,
+                mask: Some(&mask),
+                floors: Some(&starts),
+            };
+            (g, downsample(render_tile(fine, &fine_opts, spec, bg), f))
+        })
+        .collect();
+    for (g, out) in &outs {
+        stats.merge(&out.state.stats);
+        for (q, p) in pixels(*g).enumerate() {
+            let k = in_tile(*g, p);
+            linear[k] = out.linear[q];
+            coverage[k] = out.coverage[q];
+            depth[k] = out.depth[q];
+        }
+    }
+    (linear, coverage, depth)
+}
