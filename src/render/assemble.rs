@@ -12,6 +12,7 @@
 use image::{ImageBuffer, RgbImage};
 use rayon::prelude::*;
 
+use super::band::{Encoded, encode};
 use super::stats::RenderStats;
 use super::tile::TileOut;
 use super::{RenderOptions, RenderOutput, TILE, output};
@@ -40,7 +41,9 @@ fn take_front<'a, T>(s: &mut &'a mut [T], n: usize) -> &'a mut [T] {
 impl<'a> Rows<'a> {
     /// The first `n` pixels of every buffer; `self` keeps the rest.
     fn split_front(&mut self, n: usize) -> Rows<'a> {
-        let opt = |s: &mut Option<&'a mut [_]>, k: usize| s.as_mut().map(|s| take_front(s, k));
+        fn opt<'a, T>(s: &mut Option<&'a mut [T]>, k: usize) -> Option<&'a mut [T]> {
+            s.as_mut().map(|s| take_front(s, k))
+        }
         Rows {
             color: take_front(&mut self.color, 3 * n),
             linear: take_front(&mut self.linear, n),
@@ -48,7 +51,7 @@ impl<'a> Rows<'a> {
             samples: take_front(&mut self.samples, n),
             hit_mask: take_front(&mut self.hit_mask, n),
             depth_t: take_front(&mut self.depth_t, n),
-            depth: self.depth.as_mut().map(|s| take_front(s, n)),
+            depth: opt(&mut self.depth, n),
             normals: opt(&mut self.normals, 3 * n),
             class: opt(&mut self.class, 3 * n),
         }
@@ -71,25 +74,13 @@ impl<'a> Rows<'a> {
                 for (m, z) in self.hit_mask[d.clone()].iter_mut().zip(depth) {
                     *m = z.is_finite();
                 }
-                let color = self.color[d3.clone()].chunks_exact_mut(3);
-                for (px, &c) in color.zip(&t.linear[s.clone()]) {
-                    px.copy_from_slice(&srgb.pixel(c).0);
-                }
-                if let Some(out) = self.depth.as_mut() {
-                    for (o, &z) in out[d].iter_mut().zip(depth) {
-                        *o = output::depth_u16(z, depth_range);
-                    }
-                }
-                if let (Some(out), Some(tn)) = (self.normals.as_mut(), t.normals.as_ref()) {
-                    for (px, &n) in out[d3.clone()].chunks_exact_mut(3).zip(&tn[s.clone()]) {
-                        px.copy_from_slice(&output::normal_or_none(n).0);
-                    }
-                }
-                if let (Some(out), Some(tc)) = (self.class.as_mut(), t.class.as_ref()) {
-                    for (px, c) in out[d3].chunks_exact_mut(3).zip(&tc[s]) {
-                        px.copy_from_slice(&c.0);
-                    }
-                }
+                let span = Encoded {
+                    color: &mut self.color[d3.clone()],
+                    depth: self.depth.as_deref_mut().map(|v| &mut v[d]),
+                    normals: self.normals.as_deref_mut().map(|v| &mut v[d3.clone()]),
+                    class: self.class.as_deref_mut().map(|v| &mut v[d3]),
+                };
+                encode(t, s, span, &mut srgb, depth_range);
             }
         }
     }

@@ -76,21 +76,28 @@ pub(super) fn band(
     let mut srgb = output::SrgbRun::default();
     for t in outs {
         stats.merge(&t.state.stats);
+        for j in 0..t.h as usize {
+            let tw = t.w as usize;
+            let d = j * w + t.x0 as usize..j * w + t.x0 as usize + tw;
+            let span = Encoded {
+                color: &mut b.color[3 * d.start..3 * d.end],
+                depth: b.depth.as_deref_mut().map(|v| &mut v[d.clone()]),
+                normals: b
+                    .normals
+                    .as_deref_mut()
+                    .map(|v| &mut v[3 * d.start..3 * d.end]),
+                class: b
+                    .classify
+                    .as_deref_mut()
+                    .map(|v| &mut v[3 * d.start..3 * d.end]),
+            };
+            encode(t, j * tw..(j + 1) * tw, span, &mut srgb, depth_range);
+        }
         for j in 0..t.h {
             for i in 0..t.w {
                 let src = (j * t.w + i) as usize;
                 let dst = (j as usize) * w + (t.x0 + i) as usize;
-                b.color[3 * dst..3 * dst + 3].copy_from_slice(&srgb.pixel(t.linear[src]).0);
                 stats.pixels_hit += u64::from(t.depth[src].is_finite());
-                if let Some(d) = b.depth.as_mut() {
-                    d[dst] = output::depth_u16(t.depth[src], depth_range);
-                }
-                if let (Some(n), Some(tn)) = (b.normals.as_mut(), t.normals.as_ref()) {
-                    n[3 * dst..3 * dst + 3].copy_from_slice(&output::normal_or_none(tn[src]).0);
-                }
-                if let (Some(c), Some(tc)) = (b.classify.as_mut(), t.class.as_ref()) {
-                    c[3 * dst..3 * dst + 3].copy_from_slice(&tc[src].0);
-                }
                 if let Some(l) = b.linear.as_mut() {
                     l[dst] = t.linear[src].map(|c| c as f32);
                 }
@@ -109,4 +116,47 @@ pub(super) fn band(
         }
     }
     b
+}
+
+/// A run of output pixels' encoded layers (8-bit sRGB colour, 16-bit
+/// depth, normals, classes), each exactly as long as the run; the layers
+/// not asked for are absent.
+pub(super) struct Encoded<'a> {
+    /// 3 bytes a pixel.
+    pub color: &'a mut [u8],
+    /// [`output::depth_u16`] of the hit.
+    pub depth: Option<&'a mut [u16]>,
+    /// [`output::normal_or_none`], 3 bytes a pixel.
+    pub normals: Option<&'a mut [u8]>,
+    /// Classification colours, 3 bytes a pixel.
+    pub class: Option<&'a mut [u8]>,
+}
+
+/// Encodes the pixels `s` of tile `t` (a run within one of its rows) into
+/// `out`: what both the streamed bands and the in-memory images hold.
+pub(super) fn encode(
+    t: &TileOut,
+    s: std::ops::Range<usize>,
+    out: Encoded<'_>,
+    srgb: &mut output::SrgbRun,
+    depth_range: (f64, f64),
+) {
+    for (px, &c) in out.color.chunks_exact_mut(3).zip(&t.linear[s.clone()]) {
+        px.copy_from_slice(&srgb.pixel(c).0);
+    }
+    if let Some(d) = out.depth {
+        for (o, &z) in d.iter_mut().zip(&t.depth[s.clone()]) {
+            *o = output::depth_u16(z, depth_range);
+        }
+    }
+    if let (Some(n), Some(tn)) = (out.normals, t.normals.as_ref()) {
+        for (px, &v) in n.chunks_exact_mut(3).zip(&tn[s.clone()]) {
+            px.copy_from_slice(&output::normal_or_none(v).0);
+        }
+    }
+    if let (Some(c), Some(tc)) = (out.class, t.class.as_ref()) {
+        for (px, v) in c.chunks_exact_mut(3).zip(&tc[s]) {
+            px.copy_from_slice(&v.0);
+        }
+    }
 }
