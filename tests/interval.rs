@@ -325,6 +325,16 @@ fn edge_results() {
     assert!(s.lo <= 0.0 && s.lo > -1e-15);
 }
 
+/// Where the platform's tanh is 2 ulps off, ours still holds the real
+/// value (0.496337112301545704069 to 21 digits, computed with 50-digit
+/// decimal arithmetic), which lies between the two f64s below.
+#[test]
+fn tanh_holds_the_real_value_where_glibc_is_two_ulps_high() {
+    let r = Interval::point(5.444341524673745e-1).tanh();
+    assert!(r.lo <= 0.496_337_112_301_545_7, "{r:?}");
+    assert!(r.hi >= 0.496_337_112_301_545_76, "{r:?}");
+}
+
 proptest! {
     #![proptest_config(ProptestConfig {
         cases: 3000,
@@ -351,9 +361,13 @@ proptest! {
         check(p.atan2(q), x.atan2(y), &format!("atan2 {x:e} {y:e}"));
         check(p.tan(), x.tan(), &format!("tan {x:e}"));
         check(p.atan(), x.atan(), &format!("atan {x:e}"));
-        check(p.sinh(), x.sinh(), &format!("sinh {x:e}"));
-        check(p.cosh(), x.cosh(), &format!("cosh {x:e}"));
-        check(p.tanh(), x.tanh(), &format!("tanh {x:e}"));
+        // glibc documents up to 2 ulps of error for the hyperbolic
+        // functions (tanh at 0.5444341524673745 is 2 ulps high): one more
+        // ulp of slack each side for them.
+        let loose = |r: Interval| Interval::new(r.lo.next_down(), r.hi.next_up());
+        check(loose(p.sinh()), x.sinh(), &format!("sinh {x:e}"));
+        check(loose(p.cosh()), x.cosh(), &format!("cosh {x:e}"));
+        check(loose(p.tanh()), x.tanh(), &format!("tanh {x:e}"));
         let u = x.sin();
         check(Interval::point(u).asin(), u.asin(), &format!("asin {u:e}"));
         check(Interval::point(u).acos(), u.acos(), &format!("acos {u:e}"));

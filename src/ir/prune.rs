@@ -188,38 +188,12 @@ pub fn prune(f: &Function, b: [Interval; 3]) -> Option<Pruned> {
 /// live (checked before the pruned function is built, which is the costly
 /// part of a pruning that does not pay).
 pub fn prune_to_at_most(f: &Function, b: [Interval; 3], max_live: usize) -> Option<Pruned> {
-    let mut iv = Vec::with_capacity(f.ops.len());
-    run_interval(&f.ops, b, &mut iv);
-    let mut fact = vec![Facts::default(); f.ops.len()];
-    // alias[i]: the op whose value op i always equals on the box.
-    let mut alias: Vec<usize> = (0..f.ops.len()).collect();
-    let mut decided = 0;
-    for (i, op) in f.ops.iter().enumerate() {
-        let arg = |v: ValueId| (iv[v.index()], fact[v.index()]);
-        let choice = match *op {
-            Op::Binary(o, x, y) => decided_operand(o, arg(x), arg(y)).map(|k| [x, y][k]),
-            _ => None,
-        };
-        fact[i] = facts(op, iv[i], arg);
-        if let Some(winner) = choice {
-            alias[i] = alias[winner.index()];
-            decided += 1;
-        }
-    }
+    let Decided { alias, decided, .. } = decide(f, b);
     if decided == 0 {
         return None;
     }
-    // Live ops of the pruned function, through the aliases.
     let root = alias[f.root.index()];
-    let mut live = vec![false; f.ops.len()];
-    live[root] = true;
-    for i in (0..f.ops.len()).rev() {
-        if live[i] && alias[i] == i {
-            for a in f.ops[i].operands() {
-                live[alias[a.index()]] = true;
-            }
-        }
-    }
+    let live = live_through(f, &alias);
     let kept = (0..f.ops.len())
         .filter(|&i| live[i] && alias[i] == i)
         .count();
@@ -238,6 +212,104 @@ pub fn prune_to_at_most(f: &Function, b: [Interval; 3], max_live: usize) -> Opti
         function: b.finish(new_id[root].expect("root built")),
         decided,
     })
+}
+
+// Every op's interval over a box, and which `min`/`max` nodes are
+// decided there.
+struct Decided {
+    /// Each op's interval over the box.
+    iv: Vec<Interval>,
+    /// alias[i]: the op whose value op i always equals on the box.
+    alias: Vec<usize>,
+    /// How many `min`/`max` nodes were decided.
+    decided: usize,
+}
+
+fn decide(f: &Function, b: [Interval; 3]) -> Decided {
+    let mut iv = Vec::with_capacity(f.ops.len());
+    run_interval(&f.ops, b, &mut iv);
+    let mut fact = vec![Facts::default(); f.ops.len()];
+    let mut alias: Vec<usize> = (0..f.ops.len()).collect();
+    let mut decided = 0;
+    for (i, op) in f.ops.iter().enumerate() {
+        let arg = |v: ValueId| (iv[v.index()], fact[v.index()]);
+        let choice = match *op {
+            Op::Binary(o, x, y) => decided_operand(o, arg(x), arg(y)).map(|k| [x, y][k]),
+            _ => None,
+        };
+        fact[i] = facts(op, iv[i], arg);
+        if let Some(winner) = choice {
+            alias[i] = alias[winner.index()];
+            decided += 1;
+        }
+    }
+    Decided { iv, alias, decided }
+}
+
+// The ops the root reads through the aliases (an aliased op itself is
+// marked but reads nothing).
+fn live_through(f: &Function, alias: &[usize]) -> Vec<bool> {
+    let root = alias[f.root.index()];
+    let mut live = vec![false; f.ops.len()];
+    live[root] = true;
+    for i in (0..f.ops.len()).rev() {
+        if live[i] && alias[i] == i {
+            for a in f.ops[i].operands() {
+                live[alias[a.index()]] = true;
+            }
+        }
+    }
+    live
+}
+
+/// Whether `f` is proven continuously differentiable on the box `b`: once
+/// the `min`/`max` nodes decided there are replaced by their winners (see
+/// [`prune`]), no op the root reads has a kink, a jump or an infinite
+/// slope inside the box (`abs` and `sign` of an interval holding 0, an
+/// undecided `min` or `max`, `floor`, `ceil`, `round` or `mod` that is not
+/// constant on the box, `sqrt` or a power of an interval reaching 0,
+/// `asin` or `acos` reaching ±1, `atan2`, any op whose interval is not
+/// finite). A false answer proves
+/// nothing: it is what anti-aliasing uses to rule out creases (a normal
+/// that jumps inside a pixel) before it samples a pixel more sparsely.
+pub fn smooth_on(f: &Function, b: [Interval; 3]) -> bool {
+    let Decided { iv, alias, .. } = decide(f, b);
+    let live = live_through(f, &alias);
+    let finite = |v: Interval| !v.is_empty() && v.lo.is_finite() && v.hi.is_finite();
+    let constant = |v: Interval| v.lo == v.hi;
+    (0..f.ops.len())
+        .filter(|&i| live[i] && alias[i] == i)
+        .all(|i| {
+            let arg = |v: ValueId| iv[alias[v.index()]];
+            finite(iv[i])
+                && match f.ops[i] {
+                    Op::Var(_) | Op::Const(_) => true,
+                    Op::Unary(u, a) => {
+                        let x = arg(a);
+                        finite(x)
+                            && match u {
+                                UnaryOp::Abs | UnaryOp::Sign => x.lo > 0.0 || x.hi < 0.0,
+                                UnaryOp::Sqrt => x.lo > 0.0,
+                                UnaryOp::Asin | UnaryOp::Acos => x.lo > -1.0 && x.hi < 1.0,
+                                UnaryOp::Floor | UnaryOp::Ceil | UnaryOp::Round => constant(iv[i]),
+                                _ => true,
+                            }
+                    }
+                    Op::Binary(o, a, c) => {
+                        finite(arg(a))
+                            && finite(arg(c))
+                            && match o {
+                                BinaryOp::Min | BinaryOp::Max | BinaryOp::Atan2 => false,
+                                BinaryOp::Mod => false,
+                                BinaryOp::Pow => arg(a).lo > 0.0,
+                                _ => true,
+                            }
+                    }
+                    Op::Powi(a, n) => {
+                        finite(arg(a)) && (n >= 0 || arg(a).lo > 0.0 || arg(a).hi < 0.0)
+                    }
+                }
+        })
 }
 
 #[cfg(test)]
@@ -279,5 +351,41 @@ mod tests {
                 .any(|o| matches!(o, Op::Unary(UnaryOp::Sqrt, _)))
         );
         assert!(prune(&f, [Interval::new(-20.0, 20.0), bx(1.0)[1], bx(1.0)[2]]).is_some());
+    }
+
+    // x² + y² − 1 is smooth everywhere; a `min` is smooth only where it
+    // is decided; `abs` and `sqrt` only away from 0.
+    #[test]
+    fn smooth_on_finds_kinks_only_where_the_box_holds_them() {
+        let mut b = Builder::new();
+        let (x, y) = (b.var(Var::X), b.var(Var::Y));
+        let x2 = b.unary(UnaryOp::Square, x);
+        let y2 = b.unary(UnaryOp::Square, y);
+        let s = b.binary(BinaryOp::Add, x2, y2);
+        let one = b.constant(1.0);
+        let circle = b.binary(BinaryOp::Sub, s, one);
+        let m = b.binary(BinaryOp::Min, circle, y);
+        let f = b.finish(m);
+        let bx = |x0: f64, x1: f64, y0: f64, y1: f64| {
+            [
+                Interval::new(x0, x1),
+                Interval::new(y0, y1),
+                Interval::point(0.0),
+            ]
+        };
+        // Near (0, 2): circle ≈ 3 > y ≈ 2, the min picks y.
+        assert!(smooth_on(&f, bx(-0.1, 0.1, 1.9, 2.1)));
+        // Near (0, 1.618), where y² − 1 = y, the crease crosses the box.
+        assert!(!smooth_on(&f, bx(-0.1, 0.1, 1.5, 1.7)));
+
+        let mut b = Builder::new();
+        let x = b.var(Var::X);
+        let a = b.unary(UnaryOp::Abs, x);
+        let r = b.unary(UnaryOp::Sqrt, a);
+        let g = b.finish(r);
+        assert!(smooth_on(&g, bx(0.5, 1.0, 0.0, 0.0)));
+        assert!(smooth_on(&g, bx(-1.0, -0.5, 0.0, 0.0)));
+        assert!(!smooth_on(&g, bx(-0.5, 0.5, 0.0, 0.0)));
+        assert!(!smooth_on(&g, bx(0.0, 0.5, 0.0, 0.0)));
     }
 }

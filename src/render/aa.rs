@@ -41,6 +41,22 @@
 //! depth 3 with a quarter to a third of the samples (metaballs 16.4 → 4.6
 //! samples a pixel, RMSE 3.11e-4 either way).
 //!
+//! A pixel that fails the inclusion test can still be proven *covered*:
+//! its area's beam is outside every object up to `ta` (the rejected
+//! prefix) and its whole cross-section is proven negative at some `tc` no
+//! more than [`COVER_REACH`] piece widths behind (grazing rays go deeper
+//! before the cross-section is inside the solid), the piece between
+//! inside the bounds with one object that may vanish there, and that
+//! object proven continuously differentiable on the piece
+//! (`ir::prune::smooth_on`: no undecided `min`/`max`, no `abs` of an
+//! interval holding 0...). Then every ray of the pixel hits that object,
+//! first within `[ta, tc]`: no silhouette, no occlusion edge between
+//! surfaces far apart in depth, and no crease crosses the pixel, whose
+//! colour varies only with a continuous normal. Off shadow edges it gets
+//! one level fewer than the depth (at least 2×2). Most pixels IAA used to
+//! split were of this kind: on orthocircle at 256², 6,944 of 8,403 split
+//! pixels had every one of their 16 sub-samples hit.
+//!
 //! Shadows are not part of the colour interval (proving a shadow edge
 //! absent over a beam needs a shadow beam from a surface patch, which the
 //! surface itself obstructs). Instead a hit pixel whose base sample has
@@ -69,6 +85,7 @@ use super::stats::RenderStats;
 use super::tracer::{TileState, Tracer};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_meet, dot, normalize_box};
+use crate::ir::prune::smooth_on;
 
 /// Default IAA threshold: 1/64 of the linear colour range per channel.
 pub const DEFAULT_THRESHOLD: f64 = 1.0 / 64.0;
@@ -309,7 +326,64 @@ struct Decision {
     t_floor: f64,
     /// The beam was included: only the colour interval was too wide.
     by_shading: bool,
+    /// Every ray of the beam is proven to hit one object inside a thin
+    /// piece (see [`Sampling::Covered`]).
+    covered: bool,
 }
+
+/// How a pixel of an IAA tile is sampled after its area's beam tests.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub(crate) enum Sampling {
+    /// Background or smooth: the base sample stands.
+    Base,
+    /// Proven covered but not smooth: every ray of the pixel's area is
+    /// outside every object up to `ta` and inside the one object that may
+    /// vanish there at a cross-section `tc` at most `COVER_REACH` piece
+    /// widths behind (inside the bounds), so every sub-sample hits that
+    /// object within `[ta, tc]`: no silhouette and no occlusion edge
+    /// between distant surfaces crosses the pixel, and its colour varies
+    /// with the normal (grazing views, creases of that object). It gets
+    /// one level fewer than the depth (at least 2×2), off shadow edges.
+    Covered,
+    /// Included (one object, hit by every ray in a proven bracket, facing
+    /// the viewer), off any shadow edge, only the colour interval too
+    /// wide: 2×2 sub-samples.
+    Shading,
+    /// Anything else (silhouettes, thin features, shadow edges):
+    /// 2^depth × 2^depth sub-samples.
+    Full,
+}
+
+impl Sampling {
+    /// Whether the pixel gets sub-samples.
+    pub(crate) fn is_split(self) -> bool {
+        self != Sampling::Base
+    }
+
+    /// Levels of 2×2 splitting below the pixel for an IAA depth `depth`
+    /// (0 for the base sample).
+    pub(crate) fn level(self, depth: u32) -> u32 {
+        match self {
+            Sampling::Base => 0,
+            Sampling::Shading => depth.min(1),
+            Sampling::Covered => depth.saturating_sub(1).max(depth.min(1)),
+            Sampling::Full => depth,
+        }
+    }
+}
+
+/// Where the covered test looks for a proven-negative cross-section when
+/// the inclusion test's [`probe::INCLUSION_REACH`] found none, in
+/// multiples of the candidate piece's width: grazing rays go deeper
+/// before the whole cross-section is inside the solid. The bound keeps
+/// the piece thin (at most this many pixel footprints deep), so that the
+/// covered pixel holds no edge between surfaces far apart in depth.
+const COVER_REACH: [f64; 2] = [8.0, 16.0];
+
+/// Functions longer than this are not tested for smoothness over a pixel
+/// (`ir::prune::smooth_on` walks the whole function): their pixels are
+/// never sampled as covered.
+const SMOOTH_TEST_MAX_OPS: usize = 4096;
 
 /// The pixel-area tests of IAA over one tile whose base render is in
 /// `px`: background and smooth pixels are settled in place (background
@@ -325,9 +399,8 @@ pub(crate) fn classify_tile(
     st: &mut TileState,
 ) -> Classified {
     let n = (px.w * px.h) as usize;
-    let mut split = vec![false; n];
+    let mut sampling = vec![Sampling::Base; n];
     let mut floors = vec![0.0; n];
-    let mut shading = vec![false; n];
     // A hit pixel whose shadow state differs from a hit neighbour's sits
     // on a shadow edge; neighbours in the tiles around are read from
     // `beside`.
@@ -365,23 +438,16 @@ pub(crate) fn classify_tile(
         x1: px.w,
         y1: px.h,
     };
-    ctx.block(px, (&mut split, &mut floors, &mut shading), whole, 0.0, st);
-    Classified {
-        split,
-        floors,
-        shading,
-    }
+    ctx.block(px, (&mut sampling, &mut floors), whole, 0.0, st);
+    Classified { sampling, floors }
 }
 
 /// What IAA's pixel-area tests left to sample, per pixel of a tile.
 pub(crate) struct Classified {
-    /// The pixel needs sub-samples.
-    pub split: Vec<bool>,
+    /// How each pixel is sampled.
+    pub sampling: Vec<Sampling>,
     /// Where a split pixel's whole area was proven empty up to.
     pub floors: Vec<f64>,
-    /// A split pixel whose area beam proved one surface hit by every ray,
-    /// off any shadow edge: only its colour interval was too wide.
-    pub shading: Vec<bool>,
 }
 
 /// Per pixel: mean linear colour, covered fraction and nearest hit of the
@@ -446,7 +512,7 @@ impl Ctx<'_, '_> {
     fn block(
         &self,
         px: &mut TilePixels<'_>,
-        (split, floors, shading): (&mut [bool], &mut [f64], &mut [bool]),
+        (sampling, floors): (&mut [Sampling], &mut [f64]),
         b: Rect,
         t_floor: f64,
         st: &mut TileState,
@@ -475,16 +541,24 @@ impl Ctx<'_, '_> {
         }
         if b.is_pixel() {
             let k = idx((b.x0, b.y0));
-            split[k] = true;
             floors[k] = d.t_floor;
-            let edge = d.cell == Cell::Smooth && self.shadow_edge[k];
-            st.stats.aa_split_by_shading += u64::from(d.by_shading || edge);
-            shading[k] = d.by_shading && !self.shadow_edge[k];
+            let edge = self.shadow_edge[k];
+            let by_edge = d.cell == Cell::Smooth && edge;
+            st.stats.aa_split_by_shading += u64::from(d.by_shading || by_edge);
+            sampling[k] = if edge {
+                Sampling::Full
+            } else if d.by_shading {
+                Sampling::Shading
+            } else if d.covered {
+                Sampling::Covered
+            } else {
+                Sampling::Full
+            };
+            st.stats.aa_split_covered += u64::from(sampling[k] == Sampling::Covered);
             return;
         }
         for q in b.quarters_by_row() {
-            let parts = (&mut *split, &mut *floors, &mut *shading);
-            self.block(px, parts, q, d.t_floor, st);
+            self.block(px, (&mut *sampling, &mut *floors), q, d.t_floor, st);
         }
     }
 
@@ -495,6 +569,7 @@ impl Ctx<'_, '_> {
             cell,
             t_floor,
             by_shading: false,
+            covered: false,
         };
         let corners = tr.cam.corners(xs, ys);
         let bounds = bounds_box(&tr.bounds);
@@ -526,8 +601,19 @@ impl Ctx<'_, '_> {
             let hb = corners.hull(Interval::point(t));
             probe::scene_interval(tr, &self.all, hb, Form::Natural, st)
         };
-        let Some(tb2) = probe::bracket_end((ta, tb), t1, min_w, &mut whole) else {
-            return decide(Cell::Split, ta);
+        let Some(tb2) =
+            probe::bracket_end((ta, tb), t1, min_w, &probe::INCLUSION_REACH, &mut whole)
+        else {
+            // No inclusion bracket; the pixel may still be covered, with
+            // its negative cross-section deeper in.
+            let covered = b_is_pixel(xs, ys)
+                && probe::bracket_end((ta, tb), t1, min_w, &COVER_REACH, &mut whole).is_some_and(
+                    |tc| self.one_surface(&corners, &bounds, Interval::new(ta, tc), &mut st.stats),
+                );
+            return Decision {
+                covered,
+                ..decide(Cell::Split, ta)
+            };
         };
         // Narrow the bracket while a mid cross-section has one sign: the
         // normal's enclosure over the piece tightens with its depth.
@@ -544,6 +630,9 @@ impl Ctx<'_, '_> {
             }
         }
         let smooth = self.smooth_on(&corners, &bounds, Interval::new(a, b), &mut st.stats);
+        let covered = smooth != Some(true)
+            && b_is_pixel(xs, ys)
+            && self.one_surface(&corners, &bounds, Interval::new(ta, tb2), &mut st.stats);
         Decision {
             cell: if smooth == Some(true) {
                 Cell::Smooth
@@ -552,7 +641,41 @@ impl Ctx<'_, '_> {
             },
             t_floor: ta,
             by_shading: smooth == Some(false),
+            covered,
         }
+    }
+
+    // Whether the beam piece lies inside the bounds (so no ray leaves them
+    // before its root) and at most one object may vanish on it.
+    fn one_surface(
+        &self,
+        corners: &CornerRays,
+        bounds: &IBox,
+        piece: Interval,
+        st: &mut RenderStats,
+    ) -> bool {
+        let hb = corners.hull(piece);
+        if (0..3).any(|i| hb[i].lo < bounds[i].lo || hb[i].hi > bounds[i].hi) {
+            return false;
+        }
+        let tr = self.tr;
+        let vanishing: Vec<usize> = (0..tr.evals.len())
+            .filter(|&k| {
+                let f = tr.interval(k, hb, st);
+                !(f.is_empty() || f.lo > 0.0)
+            })
+            .take(2)
+            .collect();
+        if vanishing.len() > 1 {
+            return false;
+        }
+        // One object (or none) vanishes here; its normal must not jump
+        // inside the piece.
+        vanishing.first().is_none_or(|&k| {
+            tr.evals[k]
+                .function()
+                .is_some_and(|f| f.len() <= SMOOTH_TEST_MAX_OPS && smooth_on(f, hb))
+        })
     }
 
     // None unless one object alone may vanish on the beam piece and it
@@ -608,6 +731,12 @@ impl Ctx<'_, '_> {
                 .all(|c| c.hi.clamp(0.0, 1.0) - c.lo.clamp(0.0, 1.0) <= self.threshold),
         )
     }
+}
+
+// Whether the screen rectangle xs × ys is one pixel: only pixels are
+// sampled by what their test found, so larger cells skip the covered test.
+fn b_is_pixel(xs: (f64, f64), ys: (f64, f64)) -> bool {
+    xs.1 - xs.0 <= 1.0 && ys.1 - ys.0 <= 1.0
 }
 
 // A ray parameter beyond which every ray of the cell is outside the

@@ -197,7 +197,9 @@ fn beam_tests(
         Sweep::Candidate(ta, tb) => (ta, tb),
     };
     // Inclusion test: positive at ta, negative at some tb' ahead.
-    let end = probe::bracket_end((ta, tb), t1, min_w, |t| eval_min(Interval::point(t), st));
+    let end = probe::bracket_end((ta, tb), t1, min_w, &probe::INCLUSION_REACH, |t| {
+        eval_min(Interval::point(t), st)
+    });
     if let Some(tb2) = end
         && decreasing(tr, corners, Interval::new(ta, tb2), live, &mut st.stats)
     {

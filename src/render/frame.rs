@@ -8,12 +8,12 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::aa::{self, Aa, AaError, Beside, TileEdges};
+use super::aa::{self, Aa, AaError, Beside, Sampling, TileEdges};
 use super::assemble::assemble;
 use super::band::{Band, FloatLayers, band};
 use super::camera::{self, RayCamera};
 use super::stats::RenderStats;
-use super::subsample::{downsample, trace_split};
+use super::subsample::{SplitSamples, downsample, trace_split};
 use super::tile::{TileOut, TileSpec, ms_since, render_tile};
 use super::tracer::Tracer;
 use super::{MAX_SIZE, RenderError, RenderOptions, RenderOutput, TILE, output};
@@ -45,10 +45,17 @@ pub fn render_aa(
 
 /// IAA's tracers of finer images.
 struct Fine<'a> {
-    /// At 2^depth× the resolution: the sub-samples of split pixels.
-    full: Tracer<'a>,
-    /// At 2×, for pixels split by shading alone, when depth is above 1.
-    shading: Option<Tracer<'a>>,
+    /// Entry `l` traces at 2^l× the resolution, for the split pixels
+    /// sampled `l` levels below the pixel (`aa::Sampling::level`): the
+    /// depth, one below it (covered pixels) and 1 (shading alone).
+    levels: Vec<Option<Tracer<'a>>>,
+}
+
+impl<'a> Fine<'a> {
+    // The tracer of level `l` (one exists for every level a pixel can get).
+    fn at(&self, l: u32) -> Option<&Tracer<'a>> {
+        self.levels.get(l as usize).and_then(Option::as_ref)
+    }
 }
 
 /// A render whose scene, evaluators and options have been checked, ready
@@ -97,10 +104,14 @@ impl<'a> Frame<'a> {
             Ok(tr.with_camera(cam))
         };
         let fine = match aa {
-            Aa::Iaa { depth, .. } => Some(Fine {
-                full: finer(depth)?,
-                shading: if depth > 1 { Some(finer(1)?) } else { None },
-            }),
+            Aa::Iaa { depth, .. } => {
+                let used =
+                    [Sampling::Full, Sampling::Covered, Sampling::Shading].map(|s| s.level(depth));
+                let levels = (0..=depth)
+                    .map(|l| (l > 0 && used.contains(&l)).then(|| finer(l)).transpose())
+                    .collect::<Result<_, _>>()?;
+                Some(Fine { levels })
+            }
             _ => None,
         };
         let pool = rayon::ThreadPoolBuilder::new()
@@ -277,10 +288,11 @@ impl<'a> Frame<'a> {
     fn release_groups_above(&self, y: u32) {
         let s = self.aa.grid_factor();
         self.tr.groups.release_above(y * s);
-        if let (Some(fine), Aa::Iaa { depth, .. }) = (&self.fine, self.aa) {
-            fine.full.groups.release_above(y << depth);
-            if let Some(shading) = &fine.shading {
-                shading.groups.release_above(y << 1);
+        if let Some(fine) = &self.fine {
+            for (l, t) in fine.levels.iter().enumerate() {
+                if let Some(t) = t {
+                    t.groups.release_above(y << l);
+                }
             }
         }
     }
@@ -425,8 +437,8 @@ fn edges_of(t: &TileOut) -> TileEdges {
 // Applies IAA to a tile (or, for the other modes, counts its samples):
 // pixel-area tests (`beside`: the base samples around the tile, for the
 // shadow-edge rule), then the split pixels' sub-samples traced with beams
-// on `fine`'s images, square by square (`trace_split`): at 2^depth× for
-// most, at 2× for pixels split by shading alone.
+// on `fine`'s images, square by square (`trace_split`), each at its
+// pixel's level (`aa::Sampling`).
 fn anti_alias(
     tr: &Tracer<'_>,
     fine: Option<&Fine<'_>>,
@@ -464,40 +476,30 @@ fn anti_alias(
     };
     let c = aa::classify_tile(tr, &mut px, beside, bg, threshold, &mut st);
     let area = (t.x0, t.y0, t.w, t.h);
-    // Pixels split by shading alone get 2×2 sub-samples (see `aa`), the
-    // others 2^depth × 2^depth.
-    let level = |k: usize| match fine.shading {
-        Some(_) if c.shading[k] => 1,
-        _ => depth,
-    };
-    let n = c.split.len();
-    let mut sub = (depth > 0 && c.split.iter().any(|&s| s)).then(|| {
-        let full: Vec<bool> = (0..n).map(|k| c.split[k] && level(k) == depth).collect();
-        let floors = (full.as_slice(), c.floors.as_slice());
-        trace_split(
-            &fine.full,
-            opts,
-            area,
-            floors,
-            1 << depth,
-            bg,
-            &mut st.stats,
-        )
-    });
-    if let (Some(shading), Some((lin, cov, dep))) = (&fine.shading, sub.as_mut()) {
-        let smooth: Vec<bool> = (0..n).map(|k| c.split[k] && level(k) == 1).collect();
-        if smooth.iter().any(|&s| s) {
-            let floors = (smooth.as_slice(), c.floors.as_slice());
-            let (l, cv, d) = trace_split(shading, opts, area, floors, 2, bg, &mut st.stats);
-            for k in (0..n).filter(|&k| smooth[k]) {
-                (lin[k], cov[k], dep[k]) = (l[k], cv[k], d[k]);
-            }
+    // Each split pixel is sampled at its own level (see `aa::Sampling`):
+    // the pixels of one level are traced together on that level's image.
+    let n = c.sampling.len();
+    let level: Vec<u32> = c.sampling.iter().map(|s| s.level(depth)).collect();
+    let split: Vec<bool> = c.sampling.iter().map(|s| s.is_split()).collect();
+    let mut sub: Option<SplitSamples> = None;
+    for l in (1..=depth).rev() {
+        let Some(fine_tr) = fine.at(l) else { continue };
+        let these: Vec<bool> = (0..n).map(|k| split[k] && level[k] == l).collect();
+        if !these.iter().any(|&s| s) {
+            continue;
+        }
+        let floors = (these.as_slice(), c.floors.as_slice());
+        let (lin, cov, dep) = trace_split(fine_tr, opts, area, floors, 1 << l, bg, &mut st.stats);
+        let all =
+            sub.get_or_insert_with(|| (vec![[0.0; 3]; n], vec![0.0; n], vec![f64::INFINITY; n]));
+        for k in (0..n).filter(|&k| these[k]) {
+            (all.0[k], all.1[k], all.2[k]) = (lin[k], cov[k], dep[k]);
         }
     }
-    let per: Vec<u32> = (0..n).map(|k| 1 << (2 * level(k))).collect();
+    let per: Vec<u32> = level.iter().map(|&l| 1 << (2 * l)).collect();
     aa::merge_split(
         &mut px,
-        &c.split,
+        &split,
         sub.as_ref().map(|(l, c, d)| (&l[..], &c[..], &d[..])),
         &per,
         &mut st.stats,

@@ -190,23 +190,24 @@ pub(crate) fn equal_pieces(t0: f64, t1: f64, n: usize) -> Vec<(f64, f64)> {
     (0..n).rev().map(|i| (at(i), at(i + 1))).collect()
 }
 
-/// The far end of an inclusion bracket behind the candidate piece
-/// `[ta, tb]` (with `t1` the end of the beam's range): the scene function
-/// over the cross-section at `ta` (`cross(ta)`) must be strictly positive,
-/// and the first cross-section proven strictly negative at the
-/// [`INCLUSION_REACH`] multiples of the piece's width (at least
-/// `min_w(ta)`) past `ta` is the end. `None` when either fails.
+/// The far end of a bracket behind the candidate piece `[ta, tb]` (with
+/// `t1` the end of the beam's range): the scene function over the
+/// cross-section at `ta` (`cross(ta)`) must be strictly positive, and the
+/// first cross-section proven strictly negative at the `reach` multiples
+/// of the piece's width (at least `min_w(ta)`) past `ta` is the end
+/// ([`INCLUSION_REACH`] for the inclusion test). `None` when either fails.
 pub(crate) fn bracket_end(
     (ta, tb): (f64, f64),
     t1: f64,
     min_w: impl Fn(f64) -> f64,
+    reach: &[f64],
     mut cross: impl FnMut(f64) -> Interval,
 ) -> Option<f64> {
     if cross(ta).lo <= 0.0 {
         return None;
     }
     let w = (tb - ta).max(min_w(ta));
-    for mult in INCLUSION_REACH {
+    for &mult in reach {
         let tb2 = (ta + mult * w).min(t1);
         if cross(tb2).hi < 0.0 {
             return Some(tb2);

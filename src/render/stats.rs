@@ -154,6 +154,9 @@ counters! {
         /// IAA pixels split only because their colour interval was too wide
         /// (their beam passed the inclusion test).
         aa_split_by_shading: u64 => sum,
+        /// IAA pixels proven covered by one surface in a thin piece but
+        /// not smooth, sampled one level below the depth.
+        aa_split_covered: u64 => sum,
     }
     "ms" {
         /// Render wall time, ms (excludes parsing and compiling).
@@ -242,7 +245,7 @@ mod tests {
         };
         let json = st.to_json();
         let obj = json.as_object().unwrap();
-        assert_eq!(obj.len(), 30);
+        assert_eq!(obj.len(), 31);
         assert!(obj.get("aa_samples").is_none());
         assert_eq!(json["aa_samples_mean"], 2.5);
         assert_eq!(json["rays"], 3);

@@ -60,6 +60,10 @@ pub(super) fn downsample(t: TileOut, s: u32) -> TileOut {
     }
 }
 
+/// Per pixel of a tile: the mean linear colour, covered fraction and
+/// nearest hit of its sub-samples.
+pub(super) type SplitSamples = (Vec<[f64; 3]>, Vec<f64>, Vec<f64>);
+
 /// Side, in pixels, of the squares of a tile whose split pixels are traced
 /// together at the fine resolution. A fine tile spans only squares that
 /// hold a split pixel: building, clipping and sweeping the sub-samples of
@@ -80,7 +84,7 @@ pub(super) fn trace_split(
     f: u32,
     bg: [f64; 3],
     stats: &mut RenderStats,
-) -> (Vec<[f64; 3]>, Vec<f64>, Vec<f64>) {
+) -> SplitSamples {
     let n = (w * h) as usize;
     let mut linear = vec![[0.0; 3]; n];
     let mut coverage = vec![0.0; n];
