@@ -105,8 +105,13 @@ impl<'a> Frame<'a> {
         };
         let fine = match aa {
             Aa::Iaa { depth, .. } => {
-                let used =
-                    [Sampling::Full, Sampling::Covered, Sampling::Shading].map(|s| s.level(depth));
+                let used = [
+                    Sampling::Full,
+                    Sampling::Covered,
+                    Sampling::CoveredBesideFull,
+                    Sampling::Shading,
+                ]
+                .map(|s| s.level(depth));
                 let levels = (0..=depth)
                     .map(|l| (l > 0 && used.contains(&l)).then(|| finer(l)).transpose())
                     .collect::<Result<_, _>>()?;
