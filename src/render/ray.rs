@@ -121,6 +121,9 @@ fn sweep_ray(
     st: &mut TileState,
 ) -> Option<Hit> {
     let mut cand: Vec<(u32, Interval)> = Vec::with_capacity(live.len());
+    // The centred form's evaluations of each candidate, which interval
+    // Newton reads again on the same piece.
+    let mut forms: Vec<(u32, Centred)> = Vec::with_capacity(live.len());
     while let Some((a, b)) = stack.pop() {
         *steps += 1;
         let bx = ray_box(ray.o, ray.d, Interval::new(a, b));
@@ -148,8 +151,14 @@ fn sweep_ray(
             }
             continue;
         }
-        cand.retain(|&(k, _)| !centred_positive(tr, ray, k as usize, bx, a, b, &mut st.stats));
-        if cand.is_empty() {
+        forms.clear();
+        for &(k, _) in &cand {
+            let c = centred(tr, ray, k as usize, bx, (a, b), &mut st.stats);
+            if !c.positive {
+                forms.push((k, c));
+            }
+        }
+        if forms.is_empty() {
             continue;
         }
         let stt = &mut st.stats;
@@ -173,9 +182,8 @@ fn sweep_ray(
             sub.push((m, nb));
             sub.push((na, m));
         };
-        if cand.len() == 1 {
-            let k = cand[0].0 as usize;
-            match newton(tr, ray, k, a, b, stt) {
+        if let [(k, c)] = forms[..] {
+            match newton(tr, ray, k as usize, (a, b), c, stt) {
                 Newton::Empty => continue,
                 Newton::Unique(na, nb) => {
                     if let Some(h) = refine(tr, ray, live, na, nb, stt) {
@@ -196,31 +204,48 @@ fn sweep_ray(
     None
 }
 
-// The centred form along the ray: f(p(t)) ∈ F(p(m)) + (∇F(box)·d)·([a, b] − m)
+// The centred form along the ray: f(p(t)) ∈ F(p(m)) + (∇F·d)·([a, b] − m)
 // for t ∈ [a, b]. One-dimensional, it ignores the box's extent across the
 // ray, which makes the natural extension of a grazing segment's box
-// straddle 0 while the segment stays clear. True if it proves f > 0.
-// Sound under the same gradient-enclosure assumption as interval Newton.
-fn centred_positive(
+// straddle 0 while the segment stays clear. Sound under the same
+// gradient-enclosure assumption as interval Newton.
+#[derive(Copy, Clone)]
+struct Centred {
+    /// The form proves f > 0 on the piece.
+    positive: bool,
+    /// dF/dt over the piece's box.
+    dfdt: Interval,
+    /// F at the piece's midpoint, when it was evaluated (dF/dt finite).
+    fm: Option<Interval>,
+}
+
+// The centred form of object k over the piece [a, b] whose box is `bx`.
+fn centred(
     tr: &Tracer<'_>,
     ray: &PixelRay,
     k: usize,
     bx: IBox,
-    a: f64,
-    b: f64,
+    (a, b): (f64, f64),
     st: &mut RenderStats,
-) -> bool {
+) -> Centred {
     let [_, dfdt] = tr.interval_dir(k, bx, ray.d, st);
+    let mut c = Centred {
+        positive: false,
+        dfdt,
+        fm: None,
+    };
     if dfdt.is_empty() || !dfdt.lo.is_finite() || !dfdt.hi.is_finite() {
-        return false;
+        return c;
     }
     let m = 0.5 * (a + b);
     let fm = tr.interval(k, ray_box(ray.o, ray.d, Interval::point(m)), st);
+    c.fm = Some(fm);
     if fm.is_empty() {
-        return false;
+        return c;
     }
     let off = Interval::new(a, b).sub(Interval::point(m));
-    fm.add(dfdt.mul(off)).lo > 0.0
+    c.positive = fm.add(dfdt.mul(off)).lo > 0.0;
+    c
 }
 
 // A narrow piece with 0 ∈ F: refine a sign change if the ends show one,
@@ -254,22 +279,23 @@ enum Newton {
     Shrunk(f64, f64),
 }
 
-// One interval Newton step for object k on [a, b].
+// One interval Newton step for object k on [a, b], from the centred
+// form's dF/dt over the piece and F at its midpoint (`c`).
 fn newton(
     tr: &Tracer<'_>,
     ray: &PixelRay,
     k: usize,
-    a: f64,
-    b: f64,
+    (a, b): (f64, f64),
+    c: Centred,
     st: &mut RenderStats,
 ) -> Newton {
-    let bx = ray_box(ray.o, ray.d, Interval::new(a, b));
-    let [_, dfdt] = tr.interval_dir(k, bx, ray.d, st);
+    let dfdt = c.dfdt;
     if dfdt.is_empty() || dfdt.contains(0.0) || !dfdt.lo.is_finite() || !dfdt.hi.is_finite() {
         return Newton::Shrunk(a, b);
     }
     let m = 0.5 * (a + b);
-    let fm = tr.interval(k, ray_box(ray.o, ray.d, Interval::point(m)), st);
+    let fm =
+        c.fm.unwrap_or_else(|| tr.interval(k, ray_box(ray.o, ray.d, Interval::point(m)), st));
     if fm.is_empty() {
         return Newton::Shrunk(a, b);
     }
