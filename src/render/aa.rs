@@ -365,6 +365,14 @@ pub(crate) enum Sampling {
 }
 
 impl Sampling {
+    /// Every kind that gets sub-samples.
+    pub(crate) const SPLIT: [Sampling; 4] = [
+        Sampling::Covered,
+        Sampling::CoveredBesideFull,
+        Sampling::Shading,
+        Sampling::Full,
+    ];
+
     /// Whether the pixel gets sub-samples.
     pub(crate) fn is_split(self) -> bool {
         self != Sampling::Base
@@ -643,9 +651,16 @@ impl Ctx<'_, '_> {
         else {
             // No inclusion bracket; the pixel may still be covered, with
             // its negative cross-section deeper in.
-            let covered = b_is_pixel(xs, ys)
+            let covered = one_pixel(xs, ys)
                 && probe::bracket_end((ta, tb), t1, min_w, &COVER_REACH, &mut whole).is_some_and(
-                    |tc| self.one_surface(&corners, &bounds, Interval::new(ta, tc), &mut st.stats),
+                    |tc| {
+                        self.one_smooth_surface(
+                            &corners,
+                            &bounds,
+                            Interval::new(ta, tc),
+                            &mut st.stats,
+                        )
+                    },
                 );
             return Decision {
                 covered,
@@ -668,8 +683,8 @@ impl Ctx<'_, '_> {
         }
         let smooth = self.smooth_on(&corners, &bounds, Interval::new(a, b), &mut st.stats);
         let covered = smooth != Some(true)
-            && b_is_pixel(xs, ys)
-            && self.one_surface(&corners, &bounds, Interval::new(ta, tb2), &mut st.stats);
+            && one_pixel(xs, ys)
+            && self.one_smooth_surface(&corners, &bounds, Interval::new(ta, tb2), &mut st.stats);
         Decision {
             cell: if smooth == Some(true) {
                 Cell::Smooth
@@ -682,50 +697,16 @@ impl Ctx<'_, '_> {
         }
     }
 
-    // Whether the beam piece lies inside the bounds (so no ray leaves them
-    // before its root) and at most one object may vanish on it.
-    fn one_surface(
+    // The hull of the beam piece and the one object that may vanish on it
+    // (None: no object may), if the hull lies inside the bounds (so no ray
+    // leaves them before its root) and no second object may vanish there.
+    fn lone_object(
         &self,
         corners: &CornerRays,
         bounds: &IBox,
         piece: Interval,
         st: &mut RenderStats,
-    ) -> bool {
-        let hb = corners.hull(piece);
-        if (0..3).any(|i| hb[i].lo < bounds[i].lo || hb[i].hi > bounds[i].hi) {
-            return false;
-        }
-        let tr = self.tr;
-        let vanishing: Vec<usize> = (0..tr.evals.len())
-            .filter(|&k| {
-                let f = tr.interval(k, hb, st);
-                !(f.is_empty() || f.lo > 0.0)
-            })
-            .take(2)
-            .collect();
-        if vanishing.len() > 1 {
-            return false;
-        }
-        // One object (or none) vanishes here; its normal must not jump
-        // inside the piece.
-        vanishing.first().is_none_or(|&k| {
-            tr.evals[k]
-                .function()
-                .is_some_and(|f| f.len() <= SMOOTH_TEST_MAX_OPS && smooth_on(f, hb))
-        })
-    }
-
-    // None unless one object alone may vanish on the beam piece and it
-    // decreases strictly along every ray there (facing the viewer
-    // throughout); then whether the lit colour's interval over the piece
-    // is narrower than the threshold.
-    fn smooth_on(
-        &self,
-        corners: &CornerRays,
-        bounds: &IBox,
-        piece: Interval,
-        st: &mut RenderStats,
-    ) -> Option<bool> {
+    ) -> Option<(IBox, Option<usize>)> {
         let tr = self.tr;
         let hb = corners.hull(piece);
         if (0..3).any(|i| hb[i].lo < bounds[i].lo || hb[i].hi > bounds[i].hi) {
@@ -742,6 +723,42 @@ impl Ctx<'_, '_> {
             }
             only = Some(k);
         }
+        Some((hb, only))
+    }
+
+    // Whether the beam piece is inside the bounds with at most one object
+    // that may vanish there, whose normal cannot jump inside it (its
+    // function is proven continuously differentiable on the piece).
+    fn one_smooth_surface(
+        &self,
+        corners: &CornerRays,
+        bounds: &IBox,
+        piece: Interval,
+        st: &mut RenderStats,
+    ) -> bool {
+        self.lone_object(corners, bounds, piece, st)
+            .is_some_and(|(hb, only)| {
+                only.is_none_or(|k| {
+                    self.tr.evals[k]
+                        .function()
+                        .is_some_and(|f| f.len() <= SMOOTH_TEST_MAX_OPS && smooth_on(f, hb))
+                })
+            })
+    }
+
+    // None unless one object alone may vanish on the beam piece and it
+    // decreases strictly along every ray there (facing the viewer
+    // throughout); then whether the lit colour's interval over the piece
+    // is narrower than the threshold.
+    fn smooth_on(
+        &self,
+        corners: &CornerRays,
+        bounds: &IBox,
+        piece: Interval,
+        st: &mut RenderStats,
+    ) -> Option<bool> {
+        let tr = self.tr;
+        let (hb, only) = self.lone_object(corners, bounds, piece, st)?;
         let k = only?;
         let dirs = corners.directions();
         let g = tr.interval_grad(k, hb, st);
@@ -772,7 +789,7 @@ impl Ctx<'_, '_> {
 
 // Whether the screen rectangle xs × ys is one pixel: only pixels are
 // sampled by what their test found, so larger cells skip the covered test.
-fn b_is_pixel(xs: (f64, f64), ys: (f64, f64)) -> bool {
+fn one_pixel(xs: (f64, f64), ys: (f64, f64)) -> bool {
     xs.1 - xs.0 <= 1.0 && ys.1 - ys.0 <= 1.0
 }
 

@@ -105,13 +105,7 @@ impl<'a> Frame<'a> {
         };
         let fine = match aa {
             Aa::Iaa { depth, .. } => {
-                let used = [
-                    Sampling::Full,
-                    Sampling::Covered,
-                    Sampling::CoveredBesideFull,
-                    Sampling::Shading,
-                ]
-                .map(|s| s.level(depth));
+                let used = Sampling::SPLIT.map(|s| s.level(depth));
                 let levels = (0..=depth)
                     .map(|l| (l > 0 && used.contains(&l)).then(|| finer(l)).transpose())
                     .collect::<Result<_, _>>()?;
@@ -489,7 +483,7 @@ fn anti_alias(
     let mut sub: Option<SplitSamples> = None;
     for l in (1..=depth).rev() {
         let Some(fine_tr) = fine.at(l) else { continue };
-        let these: Vec<bool> = (0..n).map(|k| split[k] && level[k] == l).collect();
+        let these: Vec<bool> = level.iter().map(|&lk| lk == l).collect();
         if !these.iter().any(|&s| s) {
             continue;
         }
