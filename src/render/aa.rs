@@ -564,9 +564,12 @@ impl Ctx<'_, '_> {
     ) {
         let xs = (f64::from(px.x0 + b.x0), f64::from(px.x0 + b.x1));
         let ys = (f64::from(px.y0 + b.y0), f64::from(px.y0 + b.y1));
-        let d = self.test(xs, ys, t_floor, st);
         let w = px.w;
         let idx = move |(i, j): (u32, u32)| (j * w + i) as usize;
+        // Only a pixel off shadow edges is sampled by what the covered
+        // test finds: larger cells and edge pixels skip it.
+        let cover = b.is_pixel() && !self.shadow_edge[idx((b.x0, b.y0))];
+        let d = self.test((xs, ys), t_floor, cover, st);
         // A verdict stands only where every base ray agrees with it (a
         // rounding disagreement between a beam and a ray is settled by
         // looking closer).
@@ -607,8 +610,15 @@ impl Ctx<'_, '_> {
         }
     }
 
-    // The beam tests of the screen rectangle xs × ys (whole area).
-    fn test(&self, xs: (f64, f64), ys: (f64, f64), t_floor: f64, st: &mut TileState) -> Decision {
+    // The beam tests of the screen rectangle xs × ys (whole area); the
+    // covered test too where `cover` asks for it.
+    fn test(
+        &self,
+        (xs, ys): ((f64, f64), (f64, f64)),
+        t_floor: f64,
+        cover: bool,
+        st: &mut TileState,
+    ) -> Decision {
         let tr = self.tr;
         let decide = |cell, t_floor| Decision {
             cell,
@@ -651,7 +661,7 @@ impl Ctx<'_, '_> {
         else {
             // No inclusion bracket; the pixel may still be covered, with
             // its negative cross-section deeper in.
-            let covered = one_pixel(xs, ys)
+            let covered = cover
                 && probe::bracket_end((ta, tb), t1, min_w, &COVER_REACH, &mut whole).is_some_and(
                     |tc| {
                         self.one_smooth_surface(
@@ -682,8 +692,10 @@ impl Ctx<'_, '_> {
             }
         }
         let smooth = self.smooth_on(&corners, &bounds, Interval::new(a, b), &mut st.stats);
-        let covered = smooth != Some(true)
-            && one_pixel(xs, ys)
+        // A smooth answer either way (Smooth, or Shading with 2×2
+        // sub-samples) leaves nothing for the covered test to decide.
+        let covered = smooth.is_none()
+            && cover
             && self.one_smooth_surface(&corners, &bounds, Interval::new(ta, tb2), &mut st.stats);
         Decision {
             cell: if smooth == Some(true) {
@@ -785,12 +797,6 @@ impl Ctx<'_, '_> {
                 .all(|c| c.hi.clamp(0.0, 1.0) - c.lo.clamp(0.0, 1.0) <= self.threshold),
         )
     }
-}
-
-// Whether the screen rectangle xs × ys is one pixel: only pixels are
-// sampled by what their test found, so larger cells skip the covered test.
-fn one_pixel(xs: (f64, f64), ys: (f64, f64)) -> bool {
-    xs.1 - xs.0 <= 1.0 && ys.1 - ys.0 <= 1.0
 }
 
 // A ray parameter beyond which every ray of the cell is outside the
