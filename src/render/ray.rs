@@ -120,7 +120,8 @@ fn sweep_ray(
     (steps, scope): (&mut usize, f64),
     st: &mut TileState,
 ) -> Option<Hit> {
-    let mut cand: Vec<(u32, Interval)> = Vec::with_capacity(live.len());
+    // The live objects that may vanish on the piece.
+    let mut cand: Vec<u32> = Vec::with_capacity(live.len());
     // The centred form's evaluations of each candidate, which interval
     // Newton reads again on the same piece.
     let mut forms: Vec<(u32, Centred)> = Vec::with_capacity(live.len());
@@ -131,7 +132,7 @@ fn sweep_ray(
         for &k in live {
             let f = tr.interval(k as usize, bx, &mut st.stats);
             if !f.is_empty() && f.lo <= 0.0 {
-                cand.push((k, f));
+                cand.push(k);
             }
         }
         if cand.is_empty() {
@@ -152,7 +153,7 @@ fn sweep_ray(
             continue;
         }
         forms.clear();
-        for &(k, _) in &cand {
+        for &k in &cand {
             let c = centred(tr, ray, k as usize, bx, (a, b), &mut st.stats);
             if !c.positive {
                 forms.push((k, c));
