@@ -60,12 +60,13 @@ pub(crate) struct TileRays {
 }
 
 impl TileRays {
-    fn idx(&self, i: u32, j: u32) -> usize {
+    /// Index of the pixel in column `i`, row `j` of the tile.
+    pub(crate) fn idx(&self, i: u32, j: u32) -> usize {
         (j * self.w + i) as usize
     }
 
-    // Whether `b` is the whole tile.
-    fn is_whole(&self, b: Rect) -> bool {
+    /// Whether `b` is the whole tile.
+    pub(crate) fn is_whole(&self, b: Rect) -> bool {
         let h = self.rays.len() as u32 / self.w.max(1);
         b.x0 == 0 && b.y0 == 0 && b.x1 == self.w && b.y1 == h
     }
@@ -177,21 +178,11 @@ fn beam_tests(
             set_block(tile, b, Class::Background);
             return;
         }
+        // Flat scenes are traced by `super::plane`; a flat sweep here
+        // would only be split down to single rays.
         Sweep::Flat => {
             st.stats.blocks_undecided += 1;
-            if (b.x1 - b.x0) * (b.y1 - b.y0) <= FLAT_LEAF_PIXELS {
-                flat_leaf(tr, tile, b, live, st);
-                return;
-            }
-            // Pruning nests: each quarter prunes the tape its parent
-            // block pruned, one interval pass over a short tape. The whole
-            // tile's block spans the region its tile was pruned to: it
-            // would only prune again what is already pruned.
-            if tile.is_whole(b) {
-                split(tr, tile, b, t0, live, st);
-            } else {
-                split_pruned(tr, tile, b, (xs, ys, Interval::new(t0, t1)), t0, live, st);
-            }
+            split(tr, tile, b, t0, live, st);
             return;
         }
         Sweep::Candidate(ta, tb) => (ta, tb),
@@ -244,104 +235,14 @@ fn beam_tests(
     split_pruned(tr, tile, b, (xs, ys, window), ta, &sub_live, st);
 }
 
-/// Blocks of a flat scene this small are settled pixel by pixel in
-/// batches (`flat_leaf`) rather than split further.
-const FLAT_LEAF_PIXELS: u32 = 64;
-
-// A small block of a flat scene (f constant along every ray), settled
-// with batches rather than single rays. A pixel's single ray decides from
-// a point value at its start (f < 0: it starts inside, as
-// `ray::starts_inside` decides) and then an interval over its whole range
-// (every object proven positive or undefined: no hit, as the first piece
-// of `trace_ray` decides, a flat scene's sweep starting from one piece).
-// Here the block's cells of `FLAT_CELL`² pixels first take one interval
-// over the hull of their pixels' ray boxes: where every object is proven
-// positive or undefined there, it is so on each pixel's own box too
-// (interval arithmetic is inclusion-isotone, and a pixel's start value
-// lies in its box's interval), so those pixels are settled empty without
-// a value of their own. The other pixels take the single ray's two tests
-// in batches, and only those both leave open get single rays. Each batch
-// runs each object's tape once (`Evaluator::point_batch`,
-// `Evaluator::interval_batch`).
-fn flat_leaf(tr: &Tracer<'_>, tile: &mut TileRays, b: Rect, live: &[u32], st: &mut TileState) {
-    let cols = (b.x1 - b.x0).div_ceil(FLAT_CELL);
-    let rows = (b.y1 - b.y0).div_ceil(FLAT_CELL);
-    let mut cells: Vec<Option<IBox>> = vec![None; (cols * rows) as usize];
-    // (pixel, its clip range, its ray box, its cell)
-    let mut px: Vec<(usize, (f64, f64), IBox, usize)> =
-        Vec::with_capacity(FLAT_LEAF_PIXELS as usize);
-    for (i, j) in b.pixels() {
-        let k = tile.idx(i, j);
-        tile.hits[k] = None;
-        tile.class[k] = Class::Ray;
-        if let Some((t0, t1)) = tile.slabs[k] {
-            let r = &tile.rays[k];
-            let rb = ray_box(r.o, r.d, Interval::new(t0, t1));
-            let c = ((j - b.y0) / FLAT_CELL * cols + (i - b.x0) / FLAT_CELL) as usize;
-            cells[c] = Some(cells[c].map_or(rb, |h| box_hull(h, rb)));
-            px.push((k, (t0, t1), rb, c));
-        }
-    }
-    if px.is_empty() || live.is_empty() {
-        return;
-    }
-    let hulls: Vec<(usize, IBox)> = (cells.iter().enumerate())
-        .filter_map(|(c, h)| Some((c, (*h)?)))
-        .collect();
-    let boxes: Vec<IBox> = hulls.iter().map(|&(_, h)| h).collect();
-    let clear = clear_boxes(tr, &boxes, live, st);
-    let mut open = vec![true; cells.len()];
-    for (&(c, _), clear) in hulls.iter().zip(clear) {
-        open[c] = !clear;
-    }
-    let before = px.len();
-    px.retain(|p| open[p.3]);
-    st.stats.pixels_batched += (before - px.len()) as u64;
-    let n = px.len();
-    if n == 0 {
-        return;
-    }
-    let starts: Vec<[f64; 3]> = px
-        .iter()
-        .map(|&(k, (t0, _), _, _)| tile.rays[k].at(t0))
-        .collect();
-    let best = scene_points(tr, live, &starts, &mut st.stats);
-    let mut rest = Vec::with_capacity(n);
-    for (i, &(k, (t0, _), _, _)) in px.iter().enumerate() {
-        if best[i].0 < 0.0 {
-            st.stats.pixels_batched += 1;
-            tile.hits[k] = Some(Hit {
-                t: t0,
-                obj: best[i].1,
-                inside: true,
-                grad: None,
-            });
-        } else {
-            rest.push(i);
-        }
-    }
-    if rest.is_empty() {
-        return;
-    }
-    let boxes: Vec<IBox> = rest.iter().map(|&i| px[i].2).collect();
-    let clear = clear_boxes(tr, &boxes, live, st);
-    for (&i, clear) in rest.iter().zip(clear) {
-        if clear {
-            st.stats.pixels_batched += 1;
-        } else {
-            let (k, (t0, t1), _, _) = px[i];
-            let ray = tile.rays[k];
-            tile.hits[k] = trace_ray(tr, &ray, t0, t1, live, st);
-        }
-    }
-}
-
-/// Side, in pixels, of the cells a flat leaf first tests whole.
-const FLAT_CELL: u32 = 2;
-
-// Whether every live object is proven positive or undefined over each of
-// `boxes`, one batch per object.
-fn clear_boxes(tr: &Tracer<'_>, boxes: &[IBox], live: &[u32], st: &mut TileState) -> Vec<bool> {
+/// Whether every live object is proven positive or undefined over each of
+/// `boxes`, one batch per object.
+pub(crate) fn clear_boxes(
+    tr: &Tracer<'_>,
+    boxes: &[IBox],
+    live: &[u32],
+    st: &mut TileState,
+) -> Vec<bool> {
     let mut clear = vec![true; boxes.len()];
     let mut f = vec![Interval::point(0.0); boxes.len()];
     for &o in live {
@@ -578,7 +479,8 @@ fn include_block(
     tile.included.push(b);
 }
 
-fn set_block(tile: &mut TileRays, b: Rect, c: Class) {
+/// Settles every pixel of `b` as a miss of class `c`.
+pub(crate) fn set_block(tile: &mut TileRays, b: Rect, c: Class) {
     for (i, j) in b.pixels() {
         let k = tile.idx(i, j);
         tile.hits[k] = None;

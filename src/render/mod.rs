@@ -48,6 +48,7 @@ pub mod fit;
 mod frame;
 mod groups;
 pub mod output;
+mod plane;
 mod probe;
 pub mod ray;
 mod refine;

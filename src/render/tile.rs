@@ -8,7 +8,7 @@ use image::Rgb;
 use super::beam::{self, TileRays};
 use super::shade::{self, Surf};
 use super::tracer::{PrunedEvals, TileState, Tracer};
-use super::{Class, Method, RenderOptions, ray};
+use super::{Class, Method, RenderOptions, plane, ray};
 use crate::interval::Interval;
 
 /// Which pixels of the traced image a tile covers.
@@ -256,6 +256,7 @@ fn prune_to_tile(
 fn visibility(tr: &Tracer<'_>, method: Method, tile: &mut TileRays, th: u32, st: &mut TileState) {
     let n = tile.rays.len();
     match method {
+        Method::Beam if tr.flat => plane::trace_tile(tr, tile, th, st),
         Method::Beam => beam::trace_tile(tr, tile, th, st),
         Method::Pixel | Method::Point { .. } => {
             let all: Vec<u32> = (0..tr.evals.len() as u32).collect();

@@ -377,6 +377,12 @@ impl<'a> Tracer<'a> {
         padded(self.cam.corners(xs, ys).hull(t))
     }
 
+    /// A region for pruning around `b`, a box the tracer computed (see
+    /// [`Tracer::beam_region`]).
+    pub(crate) fn region_around(&self, b: IBox) -> Option<IBox> {
+        padded(b)
+    }
+
     /// [`Tracer::beam_region`] of a beam whose corner rays are known.
     pub(crate) fn corner_region(&self, corners: &CornerRays, t: Interval) -> Option<IBox> {
         padded(corners.hull(t))

@@ -1,0 +1,159 @@
+//! Random 2D models seen along their missing axis (flat scenes), which the
+//! beam tracer settles as a quadtree of screen rectangles with no search
+//! along the rays (`render::plane`): it must draw exactly the pixels that
+//! single interval rays draw (`Method::Pixel`), hit for hit: the same
+//! masks, depths, objects and colours. The formulas mix partial functions
+//! (sqrt, ln, division, pow) into min/max trees, so some pixels' start
+//! values are undefined; scenes have one to three objects, so the object
+//! hit is chosen among several.
+
+use ibeam::eval::{EvalKind, build_evaluators};
+use ibeam::ir::random::Rng;
+use ibeam::render::{Method, RenderError, RenderOptions, is_flat, render};
+
+/// A number as source text: two decimals, negatives in parentheses.
+fn num(v: f64) -> String {
+    let v = (v * 100.0).round() / 100.0;
+    if v < 0.0 {
+        format!("({v})")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// A random expression over the two variables `vars`.
+fn expr(rng: &mut Rng, vars: [&str; 2], depth: u32) -> String {
+    if depth == 0 || rng.chance(0.2) {
+        return match rng.below(4) {
+            0 => vars[0].into(),
+            1 => vars[1].into(),
+            _ => num(rng.range(-2.0, 2.0)),
+        };
+    }
+    let d = depth - 1;
+    match rng.below(12) {
+        0..=3 => {
+            let op = rng.pick(&["+", "-", "*", "/"]);
+            format!("({} {op} {})", expr(rng, vars, d), expr(rng, vars, d))
+        }
+        4..=6 => {
+            let f = rng.pick(&["sqrt", "abs", "ln", "sin", "square"]);
+            format!("{f}({})", expr(rng, vars, d))
+        }
+        7..=9 => {
+            let f = rng.pick(&["min", "max"]);
+            format!("{f}({}, {})", expr(rng, vars, d), expr(rng, vars, d))
+        }
+        10 => format!("pow({}, {})", expr(rng, vars, d), num(rng.range(-2.0, 3.0))),
+        _ => format!("-{}", expr(rng, vars, d)),
+    }
+}
+
+/// A disc or a box in the plane of `vars`, unions and differences of
+/// them, or a free formula.
+fn shape(rng: &mut Rng, vars: [&str; 2], depth: u32) -> String {
+    let [u, v] = vars;
+    if depth == 0 || rng.chance(0.3) {
+        let (a, b) = (num(rng.range(-1.0, 1.0)), num(rng.range(-1.0, 1.0)));
+        let r = num(rng.range(0.1, 0.8));
+        return match rng.below(3) {
+            0 => format!("sqrt(({u} - {a})^2 + ({v} - {b})^2) - {r}"),
+            1 => format!("max(abs({u} - {a}), abs({v} - {b})) - {r}"),
+            _ => format!("{u}^2 + {v}^2 - 1 + 0.3*({})", expr(rng, vars, 3)),
+        };
+    }
+    let d = depth - 1;
+    match rng.below(3) {
+        0 => format!("min({}, {})", shape(rng, vars, d), shape(rng, vars, d)),
+        1 => format!("max({}, -({}))", shape(rng, vars, d), shape(rng, vars, d)),
+        _ => expr(rng, vars, 4),
+    }
+}
+
+/// The scene text for a seed: objects over two of x, y, z, seen along the
+/// third by an orthographic camera, with a shadow-casting light.
+fn scene_source(seed: u64) -> String {
+    let mut rng = Rng::new(seed);
+    let (vars, eye, up) = match rng.below(3) {
+        0 => (["x", "y"], "(0, 0, 4)", "(0, 1, 0)"),
+        1 => (["x", "z"], "(0, 4, 0)", "(0, 0, -1)"),
+        _ => (["y", "z"], "(-4, 0, 0)", "(0, 1, 0)"),
+    };
+    let mut text = String::new();
+    for i in 0..1 + rng.below(3) {
+        text += &format!("object o{i} = {};\n", shape(&mut rng, vars, 3));
+    }
+    text += &format!(
+        "camera {{ eye = {eye}; target = (0, 0, 0); up = {up}; ortho = 3.4; }}\n\
+         bounds = (-1.5, -1.5, -1.5) .. (1.5, 1.5, 1.5);\n\
+         light {{ direction = (-0.5, -1, -0.7); shadows = true; }}\n"
+    );
+    text
+}
+
+fn check_seed(seed: u64) {
+    let text = scene_source(seed);
+    let scene = match ibeam::lang::load_scene_source("flat.ib", &text) {
+        Ok(s) => s,
+        Err(e) => {
+            assert!(
+                !e.message.contains("internal error"),
+                "seed {seed}: loader panicked\n{text}\n{e}"
+            );
+            return;
+        }
+    };
+    assert!(is_flat(&scene), "seed {seed}: not flat\n{text}");
+    let evals = build_evaluators(&scene, EvalKind::Jit).expect("JIT accepts valid IR");
+    let mut opts = RenderOptions::new(48, 40);
+    let beam = match render(&scene, &evals, &opts) {
+        Ok(out) => out,
+        Err(RenderError::Undefined(_)) => return,
+        Err(e) => panic!("seed {seed}: {e}\n{text}"),
+    };
+    opts.method = Method::Pixel;
+    let pixel = render(&scene, &evals, &opts).unwrap();
+    for k in 0..beam.hit_mask.len() {
+        assert_eq!(
+            beam.hit_mask[k], pixel.hit_mask[k],
+            "seed {seed}: hit differs at pixel {k}\n{text}"
+        );
+        assert_eq!(
+            beam.depth_t[k].to_bits(),
+            pixel.depth_t[k].to_bits(),
+            "seed {seed}: depth differs at pixel {k}\n{text}"
+        );
+        assert_eq!(
+            beam.linear[k].map(f64::to_bits),
+            pixel.linear[k].map(f64::to_bits),
+            "seed {seed}: colour differs at pixel {k}\n{text}"
+        );
+    }
+}
+
+#[test]
+fn flat_scenes_draw_the_pixels_of_single_rays() {
+    for seed in 0..96 {
+        check_seed(seed);
+    }
+}
+
+/// Some generated scenes must show both surface and background, or the
+/// comparison above would prove little.
+#[test]
+fn flat_scenes_show_surface_and_background() {
+    let mut mixed = 0;
+    for seed in 0..96 {
+        let text = scene_source(seed);
+        let Ok(scene) = ibeam::lang::load_scene_source("flat.ib", &text) else {
+            continue;
+        };
+        let evals = build_evaluators(&scene, EvalKind::Jit).unwrap();
+        let Ok(out) = render(&scene, &evals, &RenderOptions::new(48, 40)) else {
+            continue;
+        };
+        let hit = out.hit_mask.iter().filter(|&&h| h).count();
+        mixed += usize::from(hit > 0 && hit < out.hit_mask.len());
+    }
+    assert!(mixed >= 48, "only {mixed} of 96 scenes show both");
+}
