@@ -179,6 +179,10 @@ fn level(
         }
     }
     st.stats.interval_evals += (rects.len() * live.len()) as u64;
+    // The small and the proven-negative rectangles, finished together on
+    // these functions (`small`), and the objects any of them needs.
+    let mut finish: Vec<(Rect, bool)> = Vec::new();
+    let mut finish_live: Vec<u32> = Vec::new();
     for (r, &rect) in rects.iter().enumerate() {
         if plane.meeting_bounds(rect) == 0 {
             // Every ray misses the bounds: `visibility` marks them.
@@ -191,7 +195,8 @@ fn level(
             st.stats.blocks_rejected += u64::from(pixels > 1);
             set_block(tile, rect, Class::Background);
         } else if negative[r] || pixels <= SMALL_PIXELS {
-            small(tr, tile, plane, rect, live, negative[r], st);
+            finish.push((rect, negative[r]));
+            finish_live.extend(live);
         } else {
             st.stats.blocks_undecided += 1;
             let quarters: Vec<Rect> = rect.quarters_by_column().collect();
@@ -209,21 +214,28 @@ fn level(
             }
         }
     }
+    if !finish.is_empty() {
+        finish_live.sort_unstable();
+        finish_live.dedup();
+        small(tr, tile, plane, &finish, &finish_live, st);
+    }
 }
 
-// A rectangle of at most `SMALL_PIXELS` pixels (or one proven negative)
-// that its interval did not reject: its quarters, theirs and so on down to
-// single pixels are tested level by level, each level in one interval
-// batch per object, on the functions `tr` holds (pruning again would cost
-// more than it saves this close to the pixels); the pixels no rectangle
-// rejects are then settled together (`settle`).
+// Rectangles of at most `SMALL_PIXELS` pixels that their intervals did
+// not reject, or proven negative (`(rectangle, negative)`): the others'
+// quarters, theirs and so on down to single pixels are tested level by
+// level, each level of all of them in one interval batch per object, on
+// the functions `tr` holds (pruning again would cost more than it saves
+// this close to the pixels); the pixels no rectangle rejects are then
+// settled together (`settle`). `live` holds every object any of them
+// needs: an object proven positive over a rectangle stays positive over
+// its parts, and a positive value is never a start point's least.
 fn small(
     tr: &Tracer<'_>,
     tile: &mut TileRays,
     plane: &Plane,
-    rect: Rect,
+    rects: &[(Rect, bool)],
     live: &[u32],
-    negative: bool,
     st: &mut TileState,
 ) {
     // (pixel, whether a rectangle of several pixels was proven negative
@@ -233,50 +245,53 @@ fn small(
         let several = r.x1 - r.x0 > 1 || r.y1 - r.y0 > 1;
         open.extend(r.pixels().map(|(i, j)| (tile.idx(i, j), neg && several)));
     };
-    st.stats.blocks_undecided += 1;
-    if negative {
-        st.stats.blocks_included += 1;
-        add(tile, rect, true, &mut open);
-    } else {
-        let mut rects: Vec<Rect> = rect.quarters_by_column().collect();
-        let mut f = Vec::new();
-        let mut keep = Vec::new();
-        let mut neg = Vec::new();
-        while !rects.is_empty() {
-            let boxes: Vec<IBox> = rects.iter().map(|&r| plane.beam(r)).collect();
-            f.clear();
-            f.resize(rects.len(), Interval::point(0.0));
-            keep.clear();
-            keep.resize(rects.len(), false);
-            neg.clear();
-            neg.resize(rects.len(), false);
-            for &k in live {
-                tr.evals[k as usize].interval_batch(&boxes, &mut f);
-                for (r, v) in f.iter().enumerate() {
-                    if !(v.is_empty() || v.lo > 0.0) {
-                        keep[r] = true;
-                        neg[r] |= v.hi < 0.0;
-                    }
-                }
-            }
-            st.stats.interval_evals += (rects.len() * live.len()) as u64;
-            let mut next = Vec::new();
-            for (r, &q) in rects.iter().enumerate() {
-                let single = q.is_pixel();
-                if plane.meeting_bounds(q) == 0 {
-                    continue;
-                }
-                if !keep[r] {
-                    st.stats.blocks_rejected += u64::from(!single);
-                    set_block(tile, q, Class::Background);
-                } else if neg[r] || single {
-                    add(tile, q, neg[r], &mut open);
-                } else {
-                    next.extend(q.quarters_by_column());
-                }
-            }
-            rects = next;
+    let mut level: Vec<Rect> = Vec::new();
+    for &(rect, negative) in rects {
+        st.stats.blocks_undecided += 1;
+        if negative {
+            st.stats.blocks_included += 1;
+            add(tile, rect, true, &mut open);
+        } else {
+            level.extend(rect.quarters_by_column());
         }
+    }
+    let mut f = Vec::new();
+    let mut keep = Vec::new();
+    let mut neg = Vec::new();
+    while !level.is_empty() {
+        let boxes: Vec<IBox> = level.iter().map(|&r| plane.beam(r)).collect();
+        f.clear();
+        f.resize(level.len(), Interval::point(0.0));
+        keep.clear();
+        keep.resize(level.len(), false);
+        neg.clear();
+        neg.resize(level.len(), false);
+        for &k in live {
+            tr.evals[k as usize].interval_batch(&boxes, &mut f);
+            for (r, v) in f.iter().enumerate() {
+                if !(v.is_empty() || v.lo > 0.0) {
+                    keep[r] = true;
+                    neg[r] |= v.hi < 0.0;
+                }
+            }
+        }
+        st.stats.interval_evals += (level.len() * live.len()) as u64;
+        let mut next = Vec::new();
+        for (r, &q) in level.iter().enumerate() {
+            let single = q.is_pixel();
+            if plane.meeting_bounds(q) == 0 {
+                continue;
+            }
+            if !keep[r] {
+                st.stats.blocks_rejected += u64::from(!single);
+                set_block(tile, q, Class::Background);
+            } else if neg[r] || single {
+                add(tile, q, neg[r], &mut open);
+            } else {
+                next.extend(q.quarters_by_column());
+            }
+        }
+        level = next;
     }
     settle(tr, tile, &open, live, st);
 }
