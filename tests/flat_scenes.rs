@@ -9,7 +9,7 @@
 
 use ibeam::eval::{EvalKind, build_evaluators};
 use ibeam::ir::random::Rng;
-use ibeam::render::{Method, RenderError, RenderOptions, is_flat, render};
+use ibeam::render::{Aa, Method, RenderError, RenderOptions, is_flat, render, render_aa};
 
 /// A number as source text: two decimals, negatives in parentheses.
 fn num(v: f64) -> String {
@@ -128,6 +128,46 @@ fn check_seed(seed: u64) {
             pixel.linear[k].map(f64::to_bits),
             "seed {seed}: colour differs at pixel {k}\n{text}"
         );
+    }
+}
+
+/// Anti-aliased renders trace their sub-samples with the same tracer
+/// (masked fine tiles for IAA, a finer image for grids): the beam and
+/// pixel methods must again agree to the bit.
+fn check_anti_aliased(seed: u64) {
+    let text = scene_source(seed);
+    let Ok(scene) = ibeam::lang::load_scene_source("flat.ib", &text) else {
+        return;
+    };
+    let evals = build_evaluators(&scene, EvalKind::Jit).unwrap();
+    for aa in [
+        Aa::Grid(2),
+        Aa::Iaa {
+            threshold: 1.0 / 64.0,
+            depth: 2,
+        },
+    ] {
+        let mut opts = RenderOptions::new(24, 20);
+        let Ok(beam) = render_aa(&scene, &evals, &opts, aa) else {
+            return;
+        };
+        opts.method = Method::Pixel;
+        let pixel = render_aa(&scene, &evals, &opts, aa).unwrap();
+        for k in 0..beam.linear.len() {
+            assert_eq!(
+                beam.linear[k].map(f64::to_bits),
+                pixel.linear[k].map(f64::to_bits),
+                "seed {seed}, {aa:?}: colour differs at pixel {k}\n{text}"
+            );
+            assert_eq!(beam.coverage[k], pixel.coverage[k], "seed {seed}, {aa:?}");
+        }
+    }
+}
+
+#[test]
+fn anti_aliased_flat_scenes_draw_the_pixels_of_single_rays() {
+    for seed in 0..32 {
+        check_anti_aliased(seed);
     }
 }
 
