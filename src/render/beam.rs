@@ -25,7 +25,7 @@
 //! (`Tracer::interval_tight`), which pays off on the small hulls near a
 //! surface, where the natural extension overestimates most.
 
-use super::camera::{CornerRays, PixelRay};
+use super::camera::{CornerRays, PixelRay, RayGrid};
 use super::probe::{self, Form, Rect, Sweep};
 use super::ray::{scene_point, trace_ray};
 use super::refine::{Bracket, refine_batch, scene_points};
@@ -43,9 +43,15 @@ pub(crate) struct TileRays {
     pub y0: u32,
     /// Tile width in pixels.
     pub w: u32,
-    /// Per-pixel rays, row-major within the tile.
+    /// Tile height in pixels.
+    pub h: u32,
+    /// The terms every pixel's ray is summed from.
+    pub grid: RayGrid,
+    /// Per-pixel rays, row-major within the tile; empty in a flat scene's
+    /// tile, whose pixels mostly need none ([`TileRays::ray`] builds one).
     pub rays: Vec<PixelRay>,
-    /// Per-pixel slab ranges (None: the ray misses the bounds).
+    /// Per-pixel slab ranges (None: the ray misses the bounds); empty
+    /// where `rays` is (see [`TileRays::slab`]).
     pub slabs: Vec<Option<(f64, f64)>>,
     /// Per-pixel box around the ray's point at its clip start (None: the
     /// ray misses the bounds); empty until a block first needs them, then
@@ -67,8 +73,27 @@ impl TileRays {
 
     /// Whether `b` is the whole tile.
     pub(crate) fn is_whole(&self, b: Rect) -> bool {
-        let h = self.rays.len() as u32 / self.w.max(1);
-        b.x0 == 0 && b.y0 == 0 && b.x1 == self.w && b.y1 == h
+        b.x0 == 0 && b.y0 == 0 && b.x1 == self.w && b.y1 == self.h
+    }
+
+    /// The ray of pixel `k` (the same bits whether or not the tile holds
+    /// its rays).
+    #[inline]
+    pub(crate) fn ray(&self, k: usize) -> PixelRay {
+        match self.rays.get(k) {
+            Some(r) => *r,
+            None => self.grid.ray_at_index(k),
+        }
+    }
+
+    /// The slab range of pixel `k` inside `bounds`, as the tile holds it or
+    /// (where it holds none: a flat scene's tile, never masked or floored)
+    /// as `tile::tile_rays` would compute it.
+    pub(crate) fn slab(&self, k: usize, bounds: &crate::scene::Bounds) -> Option<(f64, f64)> {
+        match self.slabs.get(k) {
+            Some(s) => *s,
+            None => self.ray(k).slab(bounds),
+        }
     }
 }
 
@@ -112,7 +137,7 @@ fn block(
     if single {
         let k = tile.idx(b.x0, b.y0);
         let (pt0, pt1) = tile.slabs[k].unwrap_or((t0, t1));
-        let ray = tile.rays[k];
+        let ray = tile.ray(k);
         // In a scene large enough to prune (`Tracer::large`), the ray
         // starts where the blocks above it proved its beam empty
         // (`t_floor`) rather than at its clip start, when f is positive
@@ -367,7 +392,7 @@ fn all_start_inside(
             starts.push((k, pt0));
         }
     }
-    let points: Vec<[f64; 3]> = starts.iter().map(|&(k, t0)| tile.rays[k].at(t0)).collect();
+    let points: Vec<[f64; 3]> = starts.iter().map(|&(k, t0)| tile.ray(k).at(t0)).collect();
     let values = scene_points(tr, live, &points, st);
     // NaN (undefined) is not inside.
     if values.iter().any(|&(v, _)| v.is_nan() || v >= 0.0) {
@@ -454,7 +479,7 @@ fn include_block(
         let (ca, cb) = (ta.max(pt0), tb.min(pt1));
         let bracket = (ca < cb).then(|| {
             brackets.push(Bracket {
-                ray: tile.rays[k],
+                ray: tile.ray(k),
                 a: ca,
                 b: cb,
             });
@@ -471,7 +496,7 @@ fn include_block(
             // change: this pixel gets a full ray.
             _ => {
                 tile.class[k] = Class::Ray;
-                let ray = tile.rays[k];
+                let ray = tile.ray(k);
                 trace_ray(tr, &ray, pt0, pt1, live, st)
             }
         };

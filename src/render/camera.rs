@@ -196,53 +196,10 @@ impl RayCamera {
     }
 
     /// The rays through the centres of the `w × h` pixels from `(x0, y0)`,
-    /// row-major: the same bits as [`RayCamera::pixel_ray`] for each, with
-    /// the column terms `c + x·cx` and the row terms `y·cy` computed once
-    /// (outward rounding makes every interval product costly, and a tile's
-    /// rays are a per-pixel cost of every render).
+    /// row-major: the same bits as [`RayCamera::pixel_ray`] for each (see
+    /// [`RayGrid`]).
     pub fn pixel_rays(&self, (x0, y0): (u32, u32), (w, h): (u32, u32)) -> Vec<PixelRay> {
-        let column = |c: DVec3, cx: DVec3| -> Vec<IBox> {
-            (x0..x0 + w)
-                .map(|i| {
-                    let xi = Interval::point(f64::from(i) + 0.5);
-                    std::array::from_fn(|k| {
-                        Interval::point(c[k]).add(xi.mul(Interval::point(cx[k])))
-                    })
-                })
-                .collect()
-        };
-        let row = |cy: DVec3| -> Vec<IBox> {
-            (y0..y0 + h)
-                .map(|j| {
-                    let yj = Interval::point(f64::from(j) + 0.5);
-                    std::array::from_fn(|k| yj.mul(Interval::point(cy[k])))
-                })
-                .collect()
-        };
-        let (oc, dc) = (column(self.o0, self.ox), column(self.d0, self.dx));
-        let (or, dr) = (row(self.oy), row(self.dy));
-        let sum = |a: &IBox, b: &IBox| -> IBox { [a[0].add(b[0]), a[1].add(b[1]), a[2].add(b[2])] };
-        // A parallel camera's direction terms are the same for every column
-        // and row: their sum, and its midpoint, are then computed once (the
-        // same bits, from the same operands).
-        let same = |v: &[IBox]| v.windows(2).all(|p| bits(&p[0]) == bits(&p[1]));
-        let parallel = (same(&dc) && same(&dr)).then(|| {
-            let d = sum(&dc[0], &dr[0]);
-            (d, [d[0].mid(), d[1].mid(), d[2].mid()])
-        });
-        let mut rays = Vec::with_capacity((w * h) as usize);
-        for j in 0..h as usize {
-            for i in 0..w as usize {
-                let o = sum(&oc[i], &or[j]);
-                let om = [o[0].mid(), o[1].mid(), o[2].mid()];
-                let (d, dm) = parallel.unwrap_or_else(|| {
-                    let d = sum(&dc[i], &dr[j]);
-                    (d, [d[0].mid(), d[1].mid(), d[2].mid()])
-                });
-                rays.push(PixelRay { o, d, om, dm });
-            }
-        }
-        rays
+        RayGrid::new(self, (x0, y0), (w, h)).rays()
     }
 
     /// A sound hull of every ray point with screen x ∈ `xs`, y ∈ `ys`
@@ -395,6 +352,118 @@ impl CornerRays {
         let c = &self.rays;
         box_hull(box_hull(c[0].1, c[1].1), box_hull(c[2].1, c[3].1))
     }
+}
+
+/// The rays of a block of pixels, as per-column and per-row terms.
+///
+/// A pixel's ray origin is its column's term `c + x·cx` plus its row's
+/// `y·cy` (its direction likewise), which are the same bits as
+/// [`RayCamera::pixel_ray`] computes; the terms are computed once per
+/// column and row (outward rounding makes every interval product costly,
+/// and a tile's rays are a per-pixel cost of every render), and a ray is
+/// two sums and its midpoints, built when it is asked for.
+#[derive(Clone, Debug)]
+pub struct RayGrid {
+    w: u32,
+    origin_columns: Vec<IBox>,
+    origin_rows: Vec<IBox>,
+    direction_columns: Vec<IBox>,
+    direction_rows: Vec<IBox>,
+    // A parallel camera's direction terms are the same for every column
+    // and row: their sum, and its midpoint, computed once (the same bits,
+    // from the same operands).
+    parallel: Option<(IBox, [f64; 3])>,
+}
+
+impl RayGrid {
+    /// The terms of the `w × h` pixels from `(x0, y0)`.
+    pub fn new(cam: &RayCamera, (x0, y0): (u32, u32), (w, h): (u32, u32)) -> RayGrid {
+        let column = |c: DVec3, cx: DVec3| -> Vec<IBox> {
+            (x0..x0 + w)
+                .map(|i| {
+                    let xi = Interval::point(f64::from(i) + 0.5);
+                    std::array::from_fn(|k| {
+                        Interval::point(c[k]).add(xi.mul(Interval::point(cx[k])))
+                    })
+                })
+                .collect()
+        };
+        let row = |cy: DVec3| -> Vec<IBox> {
+            (y0..y0 + h)
+                .map(|j| {
+                    let yj = Interval::point(f64::from(j) + 0.5);
+                    std::array::from_fn(|k| yj.mul(Interval::point(cy[k])))
+                })
+                .collect()
+        };
+        let (dc, dr) = (column(cam.d0, cam.dx), row(cam.dy));
+        let same = |v: &[IBox]| v.windows(2).all(|p| bits(&p[0]) == bits(&p[1]));
+        let parallel = (w > 0 && h > 0 && same(&dc) && same(&dr)).then(|| {
+            let d = box_sum(&dc[0], &dr[0]);
+            (d, [d[0].mid(), d[1].mid(), d[2].mid()])
+        });
+        RayGrid {
+            w,
+            origin_columns: column(cam.o0, cam.ox),
+            origin_rows: row(cam.oy),
+            direction_columns: dc,
+            direction_rows: dr,
+            parallel,
+        }
+    }
+
+    /// The ray of the pixel in column `i`, row `j` of the block.
+    #[inline]
+    pub fn ray(&self, i: u32, j: u32) -> PixelRay {
+        let (i, j) = (i as usize, j as usize);
+        let o = box_sum(&self.origin_columns[i], &self.origin_rows[j]);
+        let om = [o[0].mid(), o[1].mid(), o[2].mid()];
+        let (d, dm) = self.parallel.unwrap_or_else(|| {
+            let d = box_sum(&self.direction_columns[i], &self.direction_rows[j]);
+            (d, [d[0].mid(), d[1].mid(), d[2].mid()])
+        });
+        PixelRay { o, d, om, dm }
+    }
+
+    /// The ray of the block's `k`-th pixel, row-major.
+    #[inline]
+    pub fn ray_at_index(&self, k: usize) -> PixelRay {
+        let w = self.w as usize;
+        self.ray((k % w) as u32, (k / w) as u32)
+    }
+
+    /// Every pixel's ray, row-major.
+    pub fn rays(&self) -> Vec<PixelRay> {
+        let (w, h) = (self.w, self.origin_rows.len() as u32);
+        let mut rays = Vec::with_capacity((w * h) as usize);
+        for j in 0..h {
+            for i in 0..w {
+                rays.push(self.ray(i, j));
+            }
+        }
+        rays
+    }
+
+    /// Per column of the block: the origin's column term.
+    pub fn origin_columns(&self) -> &[IBox] {
+        &self.origin_columns
+    }
+
+    /// Per row of the block: the origin's row term.
+    pub fn origin_rows(&self) -> &[IBox] {
+        &self.origin_rows
+    }
+
+    /// The direction shared by every ray, if the camera is parallel.
+    pub fn shared_direction(&self) -> Option<IBox> {
+        self.parallel.map(|(d, _)| d)
+    }
+}
+
+// The sum of two boxes, axis by axis.
+#[inline]
+fn box_sum(a: &IBox, b: &IBox) -> IBox {
+    [a[0].add(b[0]), a[1].add(b[1]), a[2].add(b[2])]
 }
 
 /// One pixel's ray.

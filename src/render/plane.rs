@@ -37,9 +37,11 @@
 //! leaves. Prospero at 1024², one thread: 106–113 → 91 ms of tracing.
 
 use super::beam::{TileRays, clear_boxes, set_block};
+use super::camera::RayGrid;
 use super::probe::Rect;
 use super::ray::trace_ray;
 use super::refine::scene_points;
+use super::tile::tile_depths;
 use super::tracer::{TileState, Tracer};
 use super::{Class, Hit};
 use crate::interval::Interval;
@@ -51,86 +53,74 @@ const SMALL_PIXELS: u32 = 64;
 
 // What every rectangle of one tile reads: the terms its beams are summed
 // from, and a table of how many of its pixels' rays meet the bounds.
-struct Plane {
-    // Per column i of the tile: `o0 + X·ox` at its pixel centre X; per row
-    // j: `Y·oy`; and `T·d` (the rays of a flat scene's camera are
-    // parallel; T is the hull of the pixels' clip ranges, so that every
-    // rectangle's beam lies inside the tile's, which the tile's functions
-    // are pruned to). A pixel's ray origin is its column's term plus its row's,
-    // the same bits as `RayCamera::pixel_rays` gives.
-    columns: Vec<IBox>,
-    rows: Vec<IBox>,
+struct Plane<'g> {
+    // Per column of the tile, the ray origins' term `o0 + X·ox`; per row,
+    // `Y·oy` (a pixel's origin is their sum, `camera::RayGrid`); and
+    // `T·d`, with d the direction every ray shares (a flat scene's camera
+    // is parallel) and T the tile's range of the ray parameter
+    // (`tile::tile_depths`, which the tile's functions are pruned to), so
+    // that every rectangle's beam lies inside the tile's.
+    columns: &'g [IBox],
+    rows: &'g [IBox],
     along: IBox,
     // `count[j * (w + 1) + i]`: pixels with a clip range among the first
-    // `j` rows and `i` columns.
-    count: Vec<u32>,
+    // `j` rows and `i` columns; `None` where the tile holds no clip ranges
+    // (then every rectangle may meet the bounds, and `settle` checks each
+    // pixel).
+    count: Option<Vec<u32>>,
     w: u32,
 }
 
-impl Plane {
-    fn new(tr: &Tracer<'_>, tile: &TileRays, h: u32) -> Option<Plane> {
-        let w = tile.w;
-        let stride = (w + 1) as usize;
-        let mut count = vec![0u32; stride * (h as usize + 1)];
-        let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
-        for j in 0..h as usize {
-            let mut row = 0;
-            for i in 0..w as usize {
-                if let Some((a, c)) = tile.slabs[j * w as usize + i] {
-                    row += 1;
-                    t0 = t0.min(a);
-                    t1 = t1.max(c);
+impl<'g> Plane<'g> {
+    fn new(tr: &Tracer<'_>, tile: &TileRays, grid: &'g RayGrid) -> Option<Plane<'g>> {
+        let (w, h) = (tile.w, tile.h);
+        let t = tile_depths(tr, tile)?;
+        let d = grid.shared_direction()?;
+        let count = (!tile.slabs.is_empty()).then(|| {
+            let stride = (w + 1) as usize;
+            let mut count = vec![0u32; stride * (h as usize + 1)];
+            for j in 0..h as usize {
+                let mut row = 0;
+                for i in 0..w as usize {
+                    row += u32::from(tile.slabs[j * w as usize + i].is_some());
+                    count[(j + 1) * stride + i + 1] = count[j * stride + i + 1] + row;
                 }
-                count[(j + 1) * stride + i + 1] = count[j * stride + i + 1] + row;
             }
-        }
-        if t0.partial_cmp(&t1).is_none_or(|o| o.is_gt()) {
-            return None;
-        }
-        let t = Interval::new(t0, t1);
-        let cam = &tr.cam;
-        let p = Interval::point;
-        let columns = (tile.x0..tile.x0 + w)
-            .map(|i| {
-                let x = p(f64::from(i) + 0.5);
-                std::array::from_fn(|k| p(cam.o0[k]).add(x.mul(p(cam.ox[k]))))
-            })
-            .collect();
-        let rows = (tile.y0..tile.y0 + h)
-            .map(|j| {
-                let y = p(f64::from(j) + 0.5);
-                std::array::from_fn(|k| y.mul(p(cam.oy[k])))
-            })
-            .collect();
-        let along = std::array::from_fn(|k| t.mul(p(cam.d0[k])));
+            count
+        });
         Some(Plane {
-            columns,
-            rows,
-            along,
+            columns: grid.origin_columns(),
+            rows: grid.origin_rows(),
+            along: std::array::from_fn(|k| t.mul(d[k])),
             count,
             w,
         })
     }
 
-    // Pixels of `r` whose rays meet the bounds.
-    fn meeting_bounds(&self, r: Rect) -> u32 {
+    // Whether some pixel of `r` may have a ray that meets the bounds.
+    fn may_meet_bounds(&self, r: Rect) -> bool {
+        let Some(count) = &self.count else {
+            return true;
+        };
         let s = (self.w + 1) as usize;
-        let at = |i: u32, j: u32| self.count[j as usize * s + i as usize];
-        at(r.x1, r.y1) + at(r.x0, r.y0) - at(r.x0, r.y1) - at(r.x1, r.y0)
+        let at = |i: u32, j: u32| count[j as usize * s + i as usize];
+        at(r.x1, r.y1) + at(r.x0, r.y0) > at(r.x0, r.y1) + at(r.x1, r.y0)
     }
 
     // A box holding every point of `r`'s rays over the tile's T range:
     // each axis's column and row terms are monotone in the pixel's
     // position, so the hull of the first and last column's (row's) holds
-    // them all, and interval sums hold every sum of their members.
+    // them all, and interval sums and products hold every sum and product
+    // of their members (each pixel's ray box over its own range lies
+    // inside).
     fn beam(&self, r: Rect) -> IBox {
         let span = |v: &[IBox], a: u32, b: u32, k: usize| {
             let (p, q) = (v[a as usize][k], v[b as usize - 1][k]);
             Interval::new(p.lo.min(q.lo), p.hi.max(q.hi))
         };
         std::array::from_fn(|k| {
-            span(&self.columns, r.x0, r.x1, k)
-                .add(span(&self.rows, r.y0, r.y1, k))
+            span(self.columns, r.x0, r.x1, k)
+                .add(span(self.rows, r.y0, r.y1, k))
                 .add(self.along[k])
         })
     }
@@ -140,7 +130,11 @@ impl Plane {
 /// high.
 pub(crate) fn trace_tile(tr: &Tracer<'_>, tile: &mut TileRays, h: u32, st: &mut TileState) {
     debug_assert!(tr.flat, "only flat scenes skip the search along rays");
-    let Some(plane) = Plane::new(tr, tile, h) else {
+    debug_assert_eq!(h, tile.h);
+    // The plane borrows the tile's ray terms while the tile's results are
+    // written: a copy of the grid keeps the two apart.
+    let grid = tile.grid.clone();
+    let Some(plane) = Plane::new(tr, tile, &grid) else {
         return;
     };
     let live: Vec<u32> = (0..tr.evals.len() as u32).collect();
@@ -184,7 +178,7 @@ fn level(
     let mut finish: Vec<(Rect, bool)> = Vec::new();
     let mut finish_live: Vec<u32> = Vec::new();
     for (r, &rect) in rects.iter().enumerate() {
-        if plane.meeting_bounds(rect) == 0 {
+        if !plane.may_meet_bounds(rect) {
             // Every ray misses the bounds: `visibility` marks them.
             continue;
         }
@@ -279,7 +273,7 @@ fn small(
         let mut next = Vec::new();
         for (r, &q) in level.iter().enumerate() {
             let single = q.is_pixel();
-            if plane.meeting_bounds(q) == 0 {
+            if !plane.may_meet_bounds(q) {
                 continue;
             }
             if !keep[r] {
@@ -317,9 +311,9 @@ fn settle(
         } else {
             Class::Ray
         };
-        if let Some(range) = tile.slabs[k] {
+        if let Some(range) = tile.slab(k, &tr.bounds) {
             px.push((k, range));
-            starts.push(tile.rays[k].at(range.0));
+            starts.push(tile.ray(k).at(range.0));
         }
     }
     let best = scene_points(tr, live, &starts, &mut st.stats);
@@ -343,7 +337,7 @@ fn settle(
     let boxes: Vec<IBox> = rest
         .iter()
         .map(|&(k, (t0, t1))| {
-            let r = &tile.rays[k];
+            let r = &tile.ray(k);
             ray_box(r.o, r.d, Interval::new(t0, t1))
         })
         .collect();
@@ -353,7 +347,7 @@ fn settle(
             st.stats.pixels_batched += 1;
         } else {
             tile.class[k] = Class::Ray;
-            let ray = tile.rays[k];
+            let ray = tile.ray(k);
             tile.hits[k] = trace_ray(tr, &ray, t0, t1, live, st);
         }
     }

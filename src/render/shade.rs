@@ -276,7 +276,7 @@ const POLISH: f64 = 1e-6;
 /// sign change brackets the hit (a tangency), the normal is kept.
 pub(crate) fn mend_singular_normals(
     tr: &Tracer<'_>,
-    rays: &[super::camera::PixelRay],
+    ray_of: impl Fn(usize) -> super::camera::PixelRay,
     hits: &[Option<super::Hit>],
     surfs: &mut [Option<Surf>],
     st: &mut RenderStats,
@@ -298,7 +298,7 @@ pub(crate) fn mend_singular_normals(
         if !singular {
             continue;
         }
-        let ray = &rays[k];
+        let ray = &ray_of(k);
         let tol = tr.cam.tolerance(hit.t);
         let (a, b) = (hit.t - 2.0 * tol, hit.t + 2.0 * tol);
         let f = |t: f64, st: &mut RenderStats| tr.point(hit.obj, ray.at(t), st);

@@ -6,6 +6,7 @@ use std::time::Instant;
 use image::Rgb;
 
 use super::beam::{self, TileRays};
+use super::camera::RayGrid;
 use super::shade::{self, Surf};
 use super::tracer::{PrunedEvals, TileState, Tracer};
 use super::{Class, Method, RenderOptions, plane, ray};
@@ -92,7 +93,7 @@ pub(crate) fn render_tile(
             state: st,
         };
     }
-    let mut tile = tile_rays(tr, &spec);
+    let mut tile = tile_rays(tr, opts, &spec);
     // Visibility inside the tile's beam runs on functions pruned to it;
     // shading and shadows, whose segments leave the beam, keep `tr`.
     let pruned = prune_to_tile(tr, &tile, spec.h, &mut st);
@@ -116,10 +117,16 @@ pub(crate) fn render_tile(
         .map(|k| {
             tile.hits[k]
                 .as_ref()
-                .map(|h| shade::surface(tr_vis, &tile.rays[k], h, &mut st.stats))
+                .map(|h| shade::surface(tr_vis, &tile.ray(k), h, &mut st.stats))
         })
         .collect();
-    shade::mend_singular_normals(tr_vis, &tile.rays, &tile.hits, &mut surfs, &mut st.stats);
+    shade::mend_singular_normals(
+        tr_vis,
+        |k| tile.ray(k),
+        &tile.hits,
+        &mut surfs,
+        &mut st.stats,
+    );
     st.stats.shade_cpu_ms += ms_since(t_shade);
 
     let lit_by_beam = shadow_beams(tr, &tile, &surfs, &mut st);
@@ -199,9 +206,21 @@ fn proven_empty(
 }
 
 // The tile's pixel rays and their ranges inside the bounds, nothing traced.
-fn tile_rays(tr: &Tracer<'_>, spec: &TileSpec<'_>) -> TileRays {
+// A flat scene's tile traced by `plane` keeps neither: its rectangles'
+// beams come from the ray terms, and only the pixels no rectangle settles
+// (and the hits, for shading) need a ray and a range of their own, which
+// `TileRays::ray` and `TileRays::slab` build (the same bits). Unless the
+// pixels are masked or floored, or classified (which marks every pixel
+// outside the bounds).
+fn tile_rays(tr: &Tracer<'_>, opts: &RenderOptions, spec: &TileSpec<'_>) -> TileRays {
     let n = (spec.w * spec.h) as usize;
-    let rays = tr.cam.pixel_rays((spec.x0, spec.y0), (spec.w, spec.h));
+    let grid = RayGrid::new(&tr.cam, (spec.x0, spec.y0), (spec.w, spec.h));
+    let lazy = tr.flat
+        && opts.method == Method::Beam
+        && spec.mask.is_none()
+        && spec.floors.is_none()
+        && !opts.want_classify;
+    let rays = if lazy { Vec::new() } else { grid.rays() };
     // Masked-out samples look like rays outside the bounds: beams over
     // them are rejected at once.
     let slabs = rays
@@ -220,6 +239,8 @@ fn tile_rays(tr: &Tracer<'_>, spec: &TileSpec<'_>) -> TileRays {
         x0: spec.x0,
         y0: spec.y0,
         w: spec.w,
+        h: spec.h,
+        grid,
         rays,
         slabs,
         hits: vec![None; n],
@@ -237,24 +258,34 @@ fn prune_to_tile(
     th: u32,
     st: &mut TileState,
 ) -> Option<(PrunedEvals, Vec<f64>)> {
+    let xs = (f64::from(tile.x0) + 0.5, f64::from(tile.x0 + tile.w) - 0.5);
+    let ys = (f64::from(tile.y0) + 0.5, f64::from(tile.y0 + th) - 0.5);
+    let t = tile_depths(tr, tile)?;
+    let pruned = tr.pruned_to_beam(xs, ys, t, st)?;
+    Some((pruned, tr.slice_ends(xs, ys, t)))
+}
+
+/// The range of the ray parameter a tile's pixels are traced over: the
+/// hull of their slab ranges, or, in a tile that holds none (see
+/// `tile_rays`), the range of its beam inside the bounds, which holds
+/// them all; `None` when no pixel's ray meets the bounds.
+pub(crate) fn tile_depths(tr: &Tracer<'_>, tile: &TileRays) -> Option<Interval> {
+    if tile.slabs.is_empty() {
+        let xs = (f64::from(tile.x0) + 0.5, f64::from(tile.x0 + tile.w) - 0.5);
+        let ys = (f64::from(tile.y0) + 0.5, f64::from(tile.y0 + tile.h) - 0.5);
+        return tr.cam.corners(xs, ys).slab_range(&tr.bounds);
+    }
     let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
     for &(a, c) in tile.slabs.iter().flatten() {
         t0 = t0.min(a);
         t1 = t1.max(c);
     }
-    if t0.partial_cmp(&t1).is_none_or(|o| o.is_gt()) {
-        return None;
-    }
-    let xs = (f64::from(tile.x0) + 0.5, f64::from(tile.x0 + tile.w) - 0.5);
-    let ys = (f64::from(tile.y0) + 0.5, f64::from(tile.y0 + th) - 0.5);
-    let t = Interval::new(t0, t1);
-    let pruned = tr.pruned_to_beam(xs, ys, t, st)?;
-    Some((pruned, tr.slice_ends(xs, ys, t)))
+    (t0 <= t1).then(|| Interval::new(t0, t1))
 }
 
 // Finds every pixel's first hit with `method`.
 fn visibility(tr: &Tracer<'_>, method: Method, tile: &mut TileRays, th: u32, st: &mut TileState) {
-    let n = tile.rays.len();
+    let n = tile.slabs.len();
     match method {
         Method::Beam if tr.flat => plane::trace_tile(tr, tile, th, st),
         Method::Beam => beam::trace_tile(tr, tile, th, st),
