@@ -124,8 +124,8 @@ fn check_seed(seed: u64) {
             "seed {seed}: depth differs at pixel {k}\n{text}"
         );
         assert_eq!(
-            beam.linear[k].map(f64::to_bits),
-            pixel.linear[k].map(f64::to_bits),
+            beam.linear[k].map(f32::to_bits),
+            pixel.linear[k].map(f32::to_bits),
             "seed {seed}: colour differs at pixel {k}\n{text}"
         );
     }
@@ -155,8 +155,8 @@ fn check_anti_aliased(seed: u64) {
         let pixel = render_aa(&scene, &evals, &opts, aa).unwrap();
         for k in 0..beam.linear.len() {
             assert_eq!(
-                beam.linear[k].map(f64::to_bits),
-                pixel.linear[k].map(f64::to_bits),
+                beam.linear[k].map(f32::to_bits),
+                pixel.linear[k].map(f32::to_bits),
                 "seed {seed}, {aa:?}: colour differs at pixel {k}\n{text}"
             );
             assert_eq!(beam.coverage[k], pixel.coverage[k], "seed {seed}, {aa:?}");

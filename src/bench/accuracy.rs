@@ -288,12 +288,12 @@ pub fn compare(reference: &RenderOutput, centre: &[bool], out: &RenderOutput) ->
     let (mut sq, mut max_abs, mut cov, mut missed) = (0.0, 0.0f64, 0u64, 0u64);
     for k in 0..n {
         for c in 0..3 {
-            let e =
-                (out.linear[k][c].clamp(0.0, 1.0) - reference.linear[k][c].clamp(0.0, 1.0)).abs();
+            let lin = |o: &RenderOutput| f64::from(o.linear[k][c]).clamp(0.0, 1.0);
+            let e = (lin(out) - lin(reference)).abs();
             sq += e * e;
             max_abs = max_abs.max(e);
         }
-        let (rc, oc) = (reference.coverage[k], out.coverage[k]);
+        let (rc, oc) = (f64::from(reference.coverage[k]), f64::from(out.coverage[k]));
         cov += u64::from((rc - oc).abs() > COVERAGE_TOLERANCE);
         let sees = rc >= 0.5 || centre.get(k).copied().unwrap_or(false);
         missed += u64::from(sees && oc == 0.0);

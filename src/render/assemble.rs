@@ -20,8 +20,8 @@ use super::{RenderOptions, RenderOutput, TILE, output};
 /// One row of tiles' share of every output buffer.
 struct Rows<'a> {
     color: &'a mut [u8],
-    linear: &'a mut [[f64; 3]],
-    coverage: &'a mut [f64],
+    linear: &'a mut [[f32; 3]],
+    coverage: &'a mut [f32],
     samples: &'a mut [u32],
     hit_mask: &'a mut [bool],
     depth_t: &'a mut [f64],
@@ -67,8 +67,15 @@ impl<'a> Rows<'a> {
                 let s = j * tw..(j + 1) * tw;
                 let d = j * width + t.x0 as usize..j * width + t.x0 as usize + tw;
                 let (d3, depth) = (3 * d.start..3 * d.end, &t.depth[s.clone()]);
-                self.linear[d.clone()].copy_from_slice(&t.linear[s.clone()]);
-                self.coverage[d.clone()].copy_from_slice(&t.coverage[s.clone()]);
+                for (o, c) in self.linear[d.clone()].iter_mut().zip(&t.linear[s.clone()]) {
+                    *o = c.map(|v| v as f32);
+                }
+                for (o, &c) in self.coverage[d.clone()]
+                    .iter_mut()
+                    .zip(&t.coverage[s.clone()])
+                {
+                    *o = c as f32;
+                }
                 self.samples[d.clone()].copy_from_slice(&t.samples[s.clone()]);
                 self.depth_t[d.clone()].copy_from_slice(depth);
                 for (m, z) in self.hit_mask[d.clone()].iter_mut().zip(depth) {
@@ -118,8 +125,8 @@ pub(super) fn assemble(
         stats.merge(&t.state.stats);
     }
     let mut color = filled(3 * npx, 0u8);
-    let mut linear = filled(npx, [0.0; 3]);
-    let mut coverage = filled(npx, 0.0);
+    let mut linear = filled(npx, [0.0f32; 3]);
+    let mut coverage = filled(npx, 0.0f32);
     let mut samples = filled(npx, 0u32);
     let mut hit_mask = filled(npx, false);
     let mut depth_t = filled(npx, 0.0);
@@ -231,11 +238,11 @@ mod tests {
                 let k = (y * w + x) as usize;
                 let v = f64::from(y * 4096 + x);
                 assert_eq!(out.samples[k], v as u32, "samples at ({x}, {y})");
-                assert_eq!(out.coverage[k], v / 1e7);
-                assert_eq!(out.linear[k], [v / 1e7, 0.5, 0.25]);
+                assert_eq!(out.coverage[k], (v / 1e7) as f32);
+                assert_eq!(out.linear[k], [(v / 1e7) as f32, 0.5, 0.25]);
                 assert_eq!(
                     out.image.get_pixel(x, y).0,
-                    output::srgb_pixel(out.linear[k]).0
+                    output::srgb_pixel([v / 1e7, 0.5, 0.25]).0
                 );
                 let d = out.depth_t[k];
                 assert!(d == v || d == f64::INFINITY);

@@ -151,9 +151,9 @@ pub struct RenderOutput {
     pub depth_t: Vec<f64>,
     /// Row-major: linear colour, the area-weighted mean over the pixel's
     /// samples (one sample without anti-aliasing).
-    pub linear: Vec<[f64; 3]>,
+    pub linear: Vec<[f32; 3]>,
     /// Row-major: fraction of the pixel (by sample area) whose samples hit.
-    pub coverage: Vec<f64>,
+    pub coverage: Vec<f32>,
     /// Row-major: samples taken in the pixel (1 without anti-aliasing).
     pub samples: Vec<u32>,
     /// Counters and times.
