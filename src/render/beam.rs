@@ -169,7 +169,7 @@ fn block(
     // which both tests below read.
     let xs = ((b.x0 + tile.x0) as f64 + 0.5, (b.x1 + tile.x0) as f64 - 0.5);
     let ys = ((b.y0 + tile.y0) as f64 + 0.5, (b.y1 + tile.y0) as f64 - 0.5);
-    let corners = tr.cam.corners(xs, ys);
+    let corners = tile.grid.corners((b.x0, b.y0), (b.x1, b.y1));
     if t_floor <= t0 && all_start_inside(tr, tile, b, &corners, live, &mut st.stats) {
         st.stats.blocks_included += 1;
         return;

@@ -444,6 +444,18 @@ impl RayGrid {
         rays
     }
 
+    /// The corner rays of the pixels in columns `i0..i1` and rows `j0..j1`
+    /// of the block (its rays through the first and last pixel centres):
+    /// the same bits as [`RayCamera::corners`] over those centres, from two
+    /// sums per corner instead of four interval products.
+    pub fn corners(&self, (i0, j0): (u32, u32), (i1, j1): (u32, u32)) -> CornerRays {
+        let c = |i: u32, j: u32| {
+            let r = self.ray(i, j);
+            (r.o, r.d)
+        };
+        CornerRays::new([c(i0, j0), c(i1 - 1, j0), c(i0, j1 - 1), c(i1 - 1, j1 - 1)])
+    }
+
     /// Per column of the block: the origin's column term.
     pub fn origin_columns(&self) -> &[IBox] {
         &self.origin_columns
@@ -616,6 +628,34 @@ mod tests {
                 for i in 0..9 {
                     assert_eq!(rays[(j * 9 + i) as usize], rc.pixel_ray(5 + i, 2 + j));
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn a_grids_rays_and_corners_are_the_cameras_to_the_bit() {
+        let perspective = Camera {
+            eye: [1e3, -2e-3, 7.0],
+            ..Camera::default()
+        };
+        for cam in cams().into_iter().chain([perspective]) {
+            let rc = RayCamera::new(&cam, 37, 23).unwrap();
+            let grid = RayGrid::new(&rc, (5, 2), (9, 7));
+            for k in 0..63 {
+                let (i, j) = (k as u32 % 9, k as u32 / 9);
+                let (a, b) = (grid.ray_at_index(k), rc.pixel_ray(5 + i, 2 + j));
+                assert_eq!((bits(&a.o), bits(&a.d)), (bits(&b.o), bits(&b.d)));
+                assert_eq!(a.om.map(f64::to_bits), b.om.map(f64::to_bits));
+            }
+            for (i0, j0, i1, j1) in [(0, 0, 9, 7), (2, 3, 3, 4), (4, 1, 8, 7)] {
+                let xs = (f64::from(5 + i0) + 0.5, f64::from(5 + i1) - 0.5);
+                let ys = (f64::from(2 + j0) + 0.5, f64::from(2 + j1) - 0.5);
+                let (a, b) = (grid.corners((i0, j0), (i1, j1)), rc.corners(xs, ys));
+                for (p, q) in a.rays().iter().zip(b.rays()) {
+                    assert_eq!((bits(&p.0), bits(&p.1)), (bits(&q.0), bits(&q.1)));
+                }
+                let t = Interval::new(0.5, 9.0);
+                assert_eq!(bits(&a.hull(t)), bits(&b.hull(t)));
             }
         }
     }
