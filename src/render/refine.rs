@@ -31,7 +31,7 @@ pub(crate) fn illinois(
         if s.narrow(tol) {
             break;
         }
-        let c = s.next(it, tol);
+        let c = s.next(it);
         s.update(c, f(c));
     }
     s.root()
@@ -39,15 +39,6 @@ pub(crate) fn illinois(
 
 /// The state of one [`illinois`] search, stepped from outside so that many
 /// searches can evaluate their next points in one batch.
-///
-/// After a false-position step whose value, over the bracket's secant
-/// slope, puts the root within half a tolerance, the next point is placed
-/// half a tolerance past the end that step moved, towards the other end:
-/// near a simple root false position lands close to it, so that probe
-/// usually changes sign and leaves a bracket of half the tolerance. False
-/// position alone keeps moving one end while the other stays put (the
-/// Illinois halving only slowly brings it in), which took about six steps
-/// per pixel on planar faces where two would do.
 #[derive(Copy, Clone, Debug)]
 pub(crate) struct Illinois {
     a: f64,
@@ -55,13 +46,6 @@ pub(crate) struct Illinois {
     fa: f64,
     fb: f64,
     side: i8,
-    // The pending point is a false-position step's (its update is then
-    // followed by a probe).
-    secant: bool,
-    // The next point is a probe half a tolerance past the moved end.
-    probe: bool,
-    // Half the tolerance of the pending point's search.
-    reach: f64,
 }
 
 impl Illinois {
@@ -73,9 +57,6 @@ impl Illinois {
             fa,
             fb,
             side: 0,
-            secant: false,
-            probe: false,
-            reach: 0.0,
         }
     }
 
@@ -84,42 +65,19 @@ impl Illinois {
         self.b - self.a <= tol
     }
 
-    /// The point iteration `it` evaluates next, for a search to within
-    /// `tol`.
-    pub(crate) fn next(&mut self, it: usize, tol: f64) -> f64 {
+    /// The point iteration `it` evaluates next.
+    pub(crate) fn next(&self, it: usize) -> f64 {
         let (a, b, fa, fb) = (self.a, self.b, self.fa, self.fb);
-        self.secant = false;
-        self.reach = 0.5 * tol;
-        if std::mem::take(&mut self.probe) {
-            let c = if self.side == 1 {
-                a + self.reach
-            } else {
-                b - self.reach
-            };
-            if c > a && c < b {
-                return c;
-            }
-        }
         let c = if it % 4 == 3 || !(fa - fb).is_finite() || fa == fb {
             0.5 * (a + b)
         } else {
-            self.secant = true;
             b - fb * (b - a) / (fb - fa)
         };
-        if c > a && c < b {
-            c
-        } else {
-            self.secant = false;
-            0.5 * (a + b)
-        }
+        if c > a && c < b { c } else { 0.5 * (a + b) }
     }
 
     /// Takes f(c) = `fc` into the bracket.
     pub(crate) fn update(&mut self, c: f64, fc: f64) {
-        // Probe only where the bracket's slope puts the root within reach
-        // of `c` (on curved stretches a probe would mostly be wasted).
-        let slope = (self.fa - self.fb) / (self.b - self.a);
-        self.probe = std::mem::take(&mut self.secant) && fc.abs() < slope * self.reach;
         if fc.is_nan() {
             // Undefined inside the bracket: shrink towards the front end.
             self.b = c;
@@ -252,8 +210,8 @@ pub(crate) fn refine_batch(
         points.clear();
         cs.clear();
         for &j in &running {
-            let (i, s, tol) = &mut searches[j];
-            let c = s.next(it, *tol);
+            let (i, s, _) = &searches[j];
+            let c = s.next(it);
             cs.push(c);
             points.push(brackets[*i].ray.at(c));
         }
