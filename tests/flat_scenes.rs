@@ -7,19 +7,12 @@
 //! values are undefined; scenes have one to three objects, so the object
 //! hit is chosen among several.
 
+mod common;
+
+use common::source_number as num;
 use ibeam::eval::{EvalKind, build_evaluators};
 use ibeam::ir::random::Rng;
 use ibeam::render::{Aa, Method, RenderError, RenderOptions, is_flat, render, render_aa};
-
-/// A number as source text: two decimals, negatives in parentheses.
-fn num(v: f64) -> String {
-    let v = (v * 100.0).round() / 100.0;
-    if v < 0.0 {
-        format!("({v})")
-    } else {
-        format!("{v}")
-    }
-}
 
 /// A random expression over the two variables `vars`.
 fn expr(rng: &mut Rng, vars: [&str; 2], depth: u32) -> String {
@@ -196,4 +189,49 @@ fn flat_scenes_show_surface_and_background() {
         mixed += usize::from(hit > 0 && hit < out.hit_mask.len());
     }
     assert!(mixed >= 48, "only {mixed} of 96 scenes show both");
+}
+
+/// A grid render traces a finer image whose tiles span several of the
+/// groups' tile cells: a function long enough (over 4096 ops) for tiles
+/// to be proven empty a group at a time must lose no sub-sample there.
+/// Each grid:2 pixel's coverage is the share of hits among the four
+/// pixels of the plain render at twice the size.
+#[test]
+fn grid_renders_of_long_functions_keep_every_sub_sample() {
+    let mut rng = Rng::new(7);
+    let discs: Vec<String> = (0..900)
+        .map(|_| {
+            // Around a ring, so that most tiles are empty and many are
+            // empty only in part.
+            let th = rng.range(0.0, std::f64::consts::TAU);
+            let (a, b) = (0.8 * th.cos(), 0.8 * th.sin());
+            let r = rng.range(0.01, 0.03);
+            format!("sqrt((x - ({a:.5}))^2 + (y - ({b:.5}))^2) - {r:.5}")
+        })
+        .collect();
+    let text = format!(
+        "object dots = min({});\n\
+         camera {{ eye = (0, 0, 4); target = (0, 0, 0); ortho = 2.2; }}\n\
+         bounds = (-1.1, -1.1, -1) .. (1.1, 1.1, 1);\n",
+        discs.join(", ")
+    );
+    let scene = ibeam::lang::load_scene_source("dots.ib", &text).unwrap();
+    let ops = scene.objects[0].function.live_count();
+    assert!(ops > 4096, "{ops} ops");
+    let evals = build_evaluators(&scene, EvalKind::Jit).unwrap();
+    let n = 96u32;
+    let fine = render(&scene, &evals, &RenderOptions::new(2 * n, 2 * n)).unwrap();
+    let grid = render_aa(&scene, &evals, &RenderOptions::new(n, n), Aa::Grid(2)).unwrap();
+    let mut partial = 0;
+    for y in 0..n as usize {
+        for x in 0..n as usize {
+            let at = |i: usize, j: usize| fine.hit_mask[(2 * y + j) * 2 * n as usize + 2 * x + i];
+            let hits = [at(0, 0), at(1, 0), at(0, 1), at(1, 1)];
+            let share = hits.iter().filter(|&&h| h).count() as f32 / 4.0;
+            let k = y * n as usize + x;
+            assert_eq!(grid.coverage[k], share, "pixel ({x}, {y})");
+            partial += usize::from(share > 0.0 && share < 1.0);
+        }
+    }
+    assert!(partial > 50, "only {partial} partly covered pixels");
 }

@@ -12,8 +12,11 @@
 //! The generator is seeded from proptest's `u64`, so a failure prints the
 //! seed; `scene_source(seed)` rebuilds the scene text.
 
+mod common;
+
 use std::sync::Arc;
 
+use common::source_number as num;
 use ibeam::eval::Evaluator;
 use ibeam::eval::interp::Interpreter;
 use ibeam::eval::{EvalKind, build_evaluators};
@@ -33,16 +36,6 @@ fn evaluators(scene: &Scene) -> Vec<Arc<dyn Evaluator>> {
 /// The reference interpreter over the same simplified functions.
 fn interp_evaluators(scene: &Scene) -> Vec<Arc<dyn Evaluator>> {
     build_evaluators(scene, EvalKind::Interp).expect("valid IR")
-}
-
-/// A number as source text: two decimals, negatives in parentheses.
-fn num(v: f64) -> String {
-    let v = (v * 100.0).round() / 100.0;
-    if v < 0.0 {
-        format!("({v})")
-    } else {
-        format!("{v}")
-    }
 }
 
 /// A random expression over x, y, z using every built-in function.

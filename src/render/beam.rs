@@ -71,9 +71,19 @@ impl TileRays {
         (j * self.w + i) as usize
     }
 
+    /// The whole tile as a block.
+    pub(crate) fn whole(&self) -> Rect {
+        Rect {
+            x0: 0,
+            y0: 0,
+            x1: self.w,
+            y1: self.h,
+        }
+    }
+
     /// Whether `b` is the whole tile.
     pub(crate) fn is_whole(&self, b: Rect) -> bool {
-        b.x0 == 0 && b.y0 == 0 && b.x1 == self.w && b.y1 == self.h
+        b == self.whole()
     }
 
     /// The ray of pixel `k` (the same bits whether or not the tile holds
@@ -99,14 +109,9 @@ impl TileRays {
 
 /// Traces every pixel of the tile with beams.
 pub(crate) fn trace_tile(tr: &Tracer<'_>, tile: &mut TileRays, h: u32, st: &mut TileState) {
+    debug_assert_eq!(h, tile.h);
     let live: Vec<u32> = (0..tr.evals.len() as u32).collect();
-    let b = Rect {
-        x0: 0,
-        y0: 0,
-        x1: tile.w,
-        y1: h,
-    };
-    block(tr, tile, b, 0.0, &live, st);
+    block(tr, tile, tile.whole(), 0.0, &live, st);
 }
 
 fn block(

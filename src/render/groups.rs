@@ -64,27 +64,39 @@ impl TileGroups {
             .map(|(evals, region, _)| (evals.clone(), *region))
     }
 
-    /// Whether the group's evaluators prove every object positive or
-    /// undefined over the beam of the tile whose first pixel is `(x, y)`,
-    /// over a range of the ray parameter that holds every one of its
-    /// pixels' slab ranges (see [`empty_tiles`]); false where nothing
-    /// prunes.
+    /// Whether the groups' evaluators prove every object positive or
+    /// undefined over the beams of every `TILE`-sized cell of the pixels
+    /// `x0..x0 + w` × `y0..y0 + h` (a tile: `TILE` wide, or a multiple of it
+    /// when `grid:N` traces a finer image), each over a range of the ray
+    /// parameter that holds every one of its pixels' slab ranges (see
+    /// [`empty_tiles`]); false where nothing prunes.
     pub(crate) fn tile_is_empty(
         &self,
         tr: &Tracer<'_>,
-        (x, y): (u32, u32),
+        (x0, y0): (u32, u32),
+        (w, h): (u32, u32),
         st: &mut TileState,
     ) -> bool {
-        let key = (x / GROUP_SIDE, y / GROUP_SIDE);
-        let cell = {
-            let mut map = self.groups.lock().unwrap_or_else(|e| e.into_inner());
-            Arc::clone(map.entry(key).or_default())
-        };
-        let group = cell.get_or_init(|| build(tr, key, st));
-        let at = ((y % GROUP_SIDE) / TILE * GROUP_TILES + (x % GROUP_SIDE) / TILE) as usize;
-        group
-            .as_ref()
-            .is_some_and(|(_, _, empty)| empty.get(at) == Some(&true))
+        if w == 0 || h == 0 || x0 % TILE != 0 || y0 % TILE != 0 {
+            return false;
+        }
+        let cells_x = (x0 / TILE)..(x0 + w).div_ceil(TILE);
+        let cells_y = (y0 / TILE)..(y0 + h).div_ceil(TILE);
+        cells_y.into_iter().all(|cy| {
+            cells_x.clone().all(|cx| {
+                let (x, y) = (cx * TILE, cy * TILE);
+                let key = (x / GROUP_SIDE, y / GROUP_SIDE);
+                let cell = {
+                    let mut map = self.groups.lock().unwrap_or_else(|e| e.into_inner());
+                    Arc::clone(map.entry(key).or_default())
+                };
+                let group = cell.get_or_init(|| build(tr, key, st));
+                let at = ((y % GROUP_SIDE) / TILE * GROUP_TILES + (x % GROUP_SIDE) / TILE) as usize;
+                group
+                    .as_ref()
+                    .is_some_and(|(_, _, empty)| empty.get(at) == Some(&true))
+            })
+        })
     }
 
     /// Drops the groups that lie wholly above image row `y`.

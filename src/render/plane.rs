@@ -138,13 +138,7 @@ pub(crate) fn trace_tile(tr: &Tracer<'_>, tile: &mut TileRays, h: u32, st: &mut 
         return;
     };
     let live: Vec<u32> = (0..tr.evals.len() as u32).collect();
-    let whole = Rect {
-        x0: 0,
-        y0: 0,
-        x1: tile.w,
-        y1: h,
-    };
-    level(tr, tile, &plane, &[whole], &live, st);
+    level(tr, tile, &plane, &[tile.whole()], &live, st);
 }
 
 // Decides the rectangles `rects` (the quarters of one rectangle, or the

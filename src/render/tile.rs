@@ -196,7 +196,9 @@ fn proven_empty(
     if tr.live_ops.iter().sum::<usize>() > EMPTY_TILE_MAX_OPS {
         let empty = tr.prune
             && tr.tapes.iter().any(Option::is_some)
-            && tr.groups.tile_is_empty(tr, (spec.x0, spec.y0), st);
+            && tr
+                .groups
+                .tile_is_empty(tr, (spec.x0, spec.y0), (spec.w, spec.h), st);
         st.stats.blocks_rejected += u64::from(empty);
         return empty;
     }

@@ -317,3 +317,14 @@ pub fn stdout(o: &Output) -> String {
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
+
+/// A number as scene source text: two decimals, negatives in parentheses
+/// (the random scene generators write formulas with it).
+pub fn source_number(v: f64) -> String {
+    let v = (v * 100.0).round() / 100.0;
+    if v < 0.0 {
+        format!("({v})")
+    } else {
+        format!("{v}")
+    }
+}
