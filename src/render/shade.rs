@@ -214,6 +214,50 @@ pub(crate) struct Surf {
     pub grad_len: f64,
 }
 
+/// The surfaces of a tile's hits, found by pixel. Most pixels of many
+/// tiles hit nothing; a full vector of optional surfaces (144 bytes a
+/// pixel) cost more to write than shading the hits of a sparse tile.
+#[derive(Clone, Debug)]
+pub(crate) struct TileSurfs {
+    // Per pixel: the index of its surface in `list` (`NONE`: no hit).
+    at: Vec<u32>,
+    list: Vec<Surf>,
+}
+
+impl TileSurfs {
+    const NONE: u32 = u32::MAX;
+
+    /// No surface on any of `n` pixels.
+    pub(crate) fn new(n: usize) -> TileSurfs {
+        TileSurfs {
+            at: vec![Self::NONE; n],
+            list: Vec::new(),
+        }
+    }
+
+    /// Pixels of the tile.
+    pub(crate) fn len(&self) -> usize {
+        self.at.len()
+    }
+
+    /// Sets pixel `k`'s surface (each pixel at most once).
+    pub(crate) fn set(&mut self, k: usize, s: Surf) {
+        debug_assert_eq!(self.at[k], Self::NONE);
+        self.at[k] = self.list.len() as u32;
+        self.list.push(s);
+    }
+
+    /// Pixel `k`'s surface, if it hit.
+    pub(crate) fn get(&self, k: usize) -> Option<&Surf> {
+        self.list.get(self.at[k] as usize)
+    }
+
+    /// Pixel `k`'s surface, if it hit.
+    pub(crate) fn get_mut(&mut self, k: usize) -> Option<&mut Surf> {
+        self.list.get_mut(self.at[k] as usize)
+    }
+}
+
 /// Surface geometry at a hit (normal from the point gradient).
 pub(crate) fn surface(
     tr: &Tracer<'_>,
@@ -278,19 +322,19 @@ pub(crate) fn mend_singular_normals(
     tr: &Tracer<'_>,
     ray_of: impl Fn(usize) -> super::camera::PixelRay,
     hits: &[Option<super::Hit>],
-    surfs: &mut [Option<Surf>],
+    surfs: &mut TileSurfs,
     st: &mut RenderStats,
 ) {
     let mut largest = vec![0.0f64; tr.evals.len()];
-    for (h, s) in hits.iter().zip(surfs.iter()) {
-        if let (Some(h), Some(s)) = (h, s)
+    for (k, h) in hits.iter().enumerate() {
+        if let (Some(h), Some(s)) = (h, surfs.get(k))
             && s.grad_len.is_finite()
         {
             largest[h.obj] = largest[h.obj].max(s.grad_len);
         }
     }
-    for k in 0..surfs.len() {
-        let (Some(hit), Some(surf)) = (&hits[k], &mut surfs[k]) else {
+    for (k, hit) in hits.iter().enumerate() {
+        let (Some(hit), Some(surf)) = (hit, surfs.get_mut(k)) else {
             continue;
         };
         // A NaN length (a cut face) is never near-singular.

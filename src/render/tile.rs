@@ -7,7 +7,7 @@ use image::Rgb;
 
 use super::beam::{self, TileRays};
 use super::camera::RayGrid;
-use super::shade::{self, Surf};
+use super::shade::{self, TileSurfs};
 use super::tracer::{PrunedEvals, TileState, Tracer};
 use super::{Class, Method, RenderOptions, plane, ray};
 use crate::interval::Interval;
@@ -113,13 +113,12 @@ pub(crate) fn render_tile(
     // Hit points lie in the tile's beam: their normals may come from the
     // pruned functions too (the same bits).
     let t_shade = Instant::now();
-    let mut surfs: Vec<Option<Surf>> = (0..n)
-        .map(|k| {
-            tile.hits[k]
-                .as_ref()
-                .map(|h| shade::surface(tr_vis, &tile.ray(k), h, &mut st.stats))
-        })
-        .collect();
+    let mut surfs = TileSurfs::new(n);
+    for (k, h) in tile.hits.iter().enumerate() {
+        if let Some(h) = h {
+            surfs.set(k, shade::surface(tr_vis, &tile.ray(k), h, &mut st.stats));
+        }
+    }
     shade::mend_singular_normals(
         tr_vis,
         |k| tile.ray(k),
@@ -329,7 +328,7 @@ fn visibility(tr: &Tracer<'_>, method: Method, tile: &mut TileRays, th: u32, st:
 fn shadow_beams(
     tr: &Tracer<'_>,
     tile: &TileRays,
-    surfs: &[Option<Surf>],
+    surfs: &TileSurfs,
     st: &mut TileState,
 ) -> Vec<bool> {
     let t_shadow = Instant::now();
@@ -345,7 +344,7 @@ fn shadow_beams(
             let mut pts = Vec::new();
             for (i, j) in b.pixels() {
                 let k = (j * tile.w + i) as usize;
-                let Some(s) = surfs[k] else { continue };
+                let Some(&s) = surfs.get(k) else { continue };
                 let facing =
                     shade::light_dir(tr, light.kind, s.p).is_some_and(|(l, _)| s.n.dot(l) > 0.0);
                 if facing {
@@ -381,7 +380,7 @@ struct Lit {
 // segments for the lights no shadow beam settled.
 fn shade_pixels(
     tr: &Tracer<'_>,
-    surfs: &[Option<Surf>],
+    surfs: &TileSurfs,
     lit_by_beam: &[bool],
     background: [f64; 3],
     opts: &RenderOptions,
@@ -398,7 +397,7 @@ fn shade_pixels(
     // without shadows: only pixels with shadow segments to trace are timed.
     let any_shadows = tr.lights.iter().any(|l| l.shadows);
     for k in 0..n {
-        if let Some(s) = &surfs[k] {
+        if let Some(s) = surfs.get(k) {
             let t0 = any_shadows.then(Instant::now);
             let (c, sh) = shade::shade(tr, s, &lit_by_beam[k * nl..(k + 1) * nl], st);
             shadow_ms += t0.map_or(0.0, ms_since);
