@@ -34,7 +34,8 @@
 //! It replaced the beam tracer's flat path, which reached the same pixels
 //! through its blocks: per-pixel start hulls and T ranges at every level,
 //! beams from corner rays, and a point and an interval per pixel of 8×8
-//! leaves. Prospero at 1024², one thread: 106–113 → 91 ms of tracing.
+//! leaves. Prospero at 1024², one thread: 106–113 → 81 ms of tracing, and
+//! 71 ms once flat tiles stopped building every pixel's ray (`tile_rays`).
 
 use super::beam::{TileRays, clear_boxes, set_block};
 use super::camera::RayGrid;
