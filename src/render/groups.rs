@@ -52,16 +52,20 @@ impl TileGroups {
         (x, y): (u32, u32),
         st: &mut TileState,
     ) -> Option<(PrunedEvals, IBox)> {
-        let key = (x / GROUP_SIDE, y / GROUP_SIDE);
-        let cell = {
+        let slot = self.built(tr, (x / GROUP_SIDE, y / GROUP_SIDE), st);
+        let group = slot.get().and_then(Option::as_ref);
+        group.map(|(evals, region, _)| (evals.clone(), *region))
+    }
+
+    // The slot of group `key`, built now if no tile has asked yet (outside
+    // the map's lock: tiles of other groups go on).
+    fn built(&self, tr: &Tracer<'_>, key: (u32, u32), st: &mut TileState) -> Slot {
+        let slot = {
             let mut map = self.groups.lock().unwrap_or_else(|e| e.into_inner());
             Arc::clone(map.entry(key).or_default())
         };
-        // Built outside the map's lock: tiles of other groups go on.
-        let group = cell.get_or_init(|| build(tr, key, st));
-        group
-            .as_ref()
-            .map(|(evals, region, _)| (evals.clone(), *region))
+        slot.get_or_init(|| build(tr, key, st));
+        slot
     }
 
     /// Whether the groups' evaluators prove every object positive or
@@ -85,16 +89,10 @@ impl TileGroups {
         cells_y.into_iter().all(|cy| {
             cells_x.clone().all(|cx| {
                 let (x, y) = (cx * TILE, cy * TILE);
-                let key = (x / GROUP_SIDE, y / GROUP_SIDE);
-                let cell = {
-                    let mut map = self.groups.lock().unwrap_or_else(|e| e.into_inner());
-                    Arc::clone(map.entry(key).or_default())
-                };
-                let group = cell.get_or_init(|| build(tr, key, st));
+                let slot = self.built(tr, (x / GROUP_SIDE, y / GROUP_SIDE), st);
                 let at = ((y % GROUP_SIDE) / TILE * GROUP_TILES + (x % GROUP_SIDE) / TILE) as usize;
-                group
-                    .as_ref()
-                    .is_some_and(|(_, _, empty)| empty.get(at) == Some(&true))
+                let group = slot.get().and_then(Option::as_ref);
+                group.is_some_and(|(_, _, empty)| empty.get(at) == Some(&true))
             })
         })
     }
@@ -125,7 +123,8 @@ fn build(tr: &Tracer<'_>, (gx, gy): (u32, u32), st: &mut TileState) -> Group {
 }
 
 // Per tile of the group whose pixels span `x0..x1 × y0..y1` (row-major,
-// `GROUP_TILES` a row, tiles past the image's edge included): whether the
+// `GROUP_TILES` a row; tiles past the image's edge, and tiles whose rays
+// all miss the bounds, stay false): whether the
 // group's evaluators `evals` prove every object positive or undefined
 // over the tile's beam over `CornerRays::slab_range`, which holds every
 // pixel's slab range. Every box the tile's tracing would evaluate lies in
