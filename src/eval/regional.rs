@@ -78,6 +78,26 @@ impl Regional {
         }
     }
 
+    /// [`Regional::delegating`] with a tape another region already holds
+    /// (exact on a region holding this one), shared rather than pruned
+    /// again: for regions whose pruning would not pay.
+    pub fn sharing(
+        region: IBox,
+        tape: Arc<TapeEvaluator>,
+        (answer, answer_len): (Arc<dyn Evaluator>, usize),
+        parent: Arc<dyn Evaluator>,
+    ) -> Regional {
+        Regional {
+            region,
+            tape,
+            answer,
+            own: false,
+            answer_len,
+            parent,
+            children: Vec::new(),
+        }
+    }
+
     /// The same region with these sub-regions (each inside it, exact on
     /// its own region; their parents are never asked, as a box reaches a
     /// sub-region only through this one).
@@ -110,6 +130,12 @@ impl Regional {
     /// The pruned tape.
     pub fn pruned_tape(&self) -> &Tape {
         self.tape.tape()
+    }
+
+    /// The pruned tape as an evaluator, to share with a region inside
+    /// this one (see [`Regional::sharing`]).
+    pub fn shared_tape(&self) -> &Arc<TapeEvaluator> {
+        &self.tape
     }
 
     /// The smallest region of the tree (this one or a sub-region, nested)

@@ -10,6 +10,15 @@
 //! group's tape depends only on its region, so the images and counters do
 //! not depend on the thread count.
 //!
+//! In 3D the group's beam is a tree of regions along the rays, like a
+//! tile's (see `render::slices`), halved down to slices about as deep as
+//! the group is wide. Over a long beam nearly every object's interval
+//! overlaps the nearest one's, so pruning a tile's whole beam, or its
+//! halves, kept nearly all of the group's tape and cost as much as an
+//! evaluation of it: those regions of a tile now share the group's tape,
+//! and the tile's shorter slices prune from the group's slice holding them
+//! (1000 spheres at 1024²: 107 M ops pruned, now 61 M, for the same image).
+//!
 //! A streamed render drops the groups above the rows it has finished, so
 //! memory holds one row of groups, not the image's.
 
@@ -19,7 +28,6 @@ use std::sync::{Arc, Mutex, OnceLock};
 use super::TILE;
 use super::tracer::{PrunedEvals, TileState, Tracer};
 use crate::eval::Evaluator;
-use crate::eval::regional::Regional;
 use crate::interval::Interval;
 use crate::interval::boxes::IBox;
 
@@ -106,8 +114,9 @@ impl TileGroups {
 
 // The group `(gx, gy)`'s evaluators: each large function pruned to the
 // group's beam over every ray parameter at which its rays can be inside
-// the bounds. A tape that does not shrink enough to answer (see
-// `Tracer::pruned_to_beam`) is kept to prune the tiles' from.
+// the bounds, and to its slices along the rays (see
+// `Tracer::pruned_group`). A tape that does not shrink enough to answer
+// (see `Tracer::pruned_to_beam`) is kept to prune the tiles' from.
 fn build(tr: &Tracer<'_>, (gx, gy): (u32, u32), st: &mut TileState) -> Group {
     let x0 = gx * GROUP_SIDE;
     let y0 = gy * GROUP_SIDE;
@@ -117,7 +126,7 @@ fn build(tr: &Tracer<'_>, (gx, gy): (u32, u32), st: &mut TileState) -> Group {
     let ys = (f64::from(y0) + 0.5, f64::from(y1) - 0.5);
     let t = beam_range(tr, xs, ys)?;
     let region = tr.beam_region(xs, ys, t)?;
-    let evals = tr.pruned_group(region, st)?;
+    let evals = tr.pruned_group(xs, ys, t, st)?;
     let empty = empty_tiles(tr, &evals.0, (x0, y0), (x1, y1), st);
     Some((evals, region, empty))
 }
@@ -193,31 +202,6 @@ fn empty_tiles(
 // `xs × ys`.
 fn beam_range(tr: &Tracer<'_>, xs: (f64, f64), ys: (f64, f64)) -> Option<Interval> {
     tr.cam.corners(xs, ys).slab_range(&tr.bounds)
-}
-
-/// Object evaluators pruned to a group's region.
-impl Tracer<'_> {
-    /// Each large function's tape pruned to `region`, answering there if
-    /// it shrank enough and otherwise keeping the tape only to prune from;
-    /// `None` when no tape prunes.
-    pub(crate) fn pruned_group(&self, region: IBox, st: &mut TileState) -> Option<PrunedEvals> {
-        if !self.prune {
-            return None;
-        }
-        self.replace_evals(|k, e| {
-            let tape = self.tapes[k].as_deref()?;
-            let own = tape.prune(region, &mut st.workspace)?.tape;
-            let n = own.len();
-            let node = if n * super::tracer::gain(e.as_ref()) <= tape.len() {
-                st.stats.pruned_ops_before += tape.len() as u64;
-                st.stats.pruned_ops_after += n as u64;
-                Regional::new(region, own, Arc::clone(e))
-            } else {
-                Regional::delegating(region, own, (Arc::clone(e), tape.len()), Arc::clone(e))
-            };
-            Some((Arc::new(node) as Arc<dyn Evaluator>, n))
-        })
-    }
 }
 
 #[cfg(test)]

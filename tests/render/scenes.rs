@@ -125,28 +125,44 @@ fn bad_inputs_are_errors() {
     ));
 }
 
-/// A union of `n` spheres of radius 0.06 at pseudo-random places in the
-/// unit cube, seen from a corner in perspective.
-fn spheres_scene(n: usize) -> String {
+/// A union of `n` spheres of radius `r` at pseudo-random places in the
+/// unit cube, seen through `camera` (the body of a camera block), lit by
+/// the default light, which casts shadows unless `shadows` is false.
+fn spheres_scene(n: usize, r: f64, camera: &str, shadows: bool) -> String {
     let mut rng = ibeam::ir::random::Rng::new(5);
     let balls: Vec<String> = (0..n)
         .map(|_| {
             let [x, y, z] = [(); 3].map(|_| rng.range(-0.9, 0.9));
-            format!("translate(sphere(0.06), {x}, {y}, {z})")
+            format!("translate(sphere({r}), {x}, {y}, {z})")
         })
         .collect();
+    let light = if shadows {
+        ""
+    } else {
+        "light { direction = (-0.4, -1, -0.6); shadows = false; }\n"
+    };
     format!(
         "object s = union({});\n\
-         camera {{ eye = (2.2, 1.6, 2.8); target = (0, 0, 0); }}\n\
+         camera {{ {camera} }}\n{light}\
          bounds = (-1, -1, -1) .. (1, 1, 1);\n",
         balls.join(", ")
     )
 }
 
+/// [`spheres_scene`] seen from a corner in perspective.
+const CORNER_VIEW: &str = "eye = (2.2, 1.6, 2.8); target = (0, 0, 0);";
+
+/// [`spheres_scene`] seen along z, orthographically, through a window a
+/// quarter of the cube wide: at 128² a tile's beam is 16 times deeper
+/// than wide.
+const ALONG_Z: &str = "eye = (0, 0, 3); target = (0, 0, 0); ortho = 0.5;";
+
 /// Pruning (`eval::tape`, `eval::regional`) changes how large functions
 /// are evaluated, not what is drawn: a 2D model of 81 discs (a CSG union
 /// of about 650 ops, seen along z), a 3D union of 80 spheres seen in
-/// perspective (pruned per slice of each tile's beam and per block), the
+/// perspective (pruned per slice of each tile's beam and per block), a 3D
+/// union of 400 smaller ones seen along z (whose tiles' long slices share
+/// their group's tapes and whose short ones prune from the group's), the
 /// prospero model (2D) and the colonnade model (3D) render the same hit
 /// mask and the same hit depths with and without it, and pruning did
 /// happen; the pixel method draws the same hit mask.
@@ -179,8 +195,17 @@ fn pruning_draws_what_the_whole_function_draws() {
             384,
         ),
         (
-            ibeam::lang::load_scene_source("spheres.ib", &spheres_scene(80)).unwrap(),
+            ibeam::lang::load_scene_source(
+                "spheres.ib",
+                &spheres_scene(80, 0.06, CORNER_VIEW, true),
+            )
+            .unwrap(),
             160,
+        ),
+        (
+            ibeam::lang::load_scene_source("many.ib", &spheres_scene(400, 0.04, ALONG_Z, false))
+                .unwrap(),
+            128,
         ),
     ];
     // The community models, when ../shared is beside the checkout: prospero
