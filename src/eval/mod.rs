@@ -79,6 +79,13 @@ pub trait Evaluator: Send + Sync {
         false
     }
 
+    /// Whether the derivative kinds (gradients and directional
+    /// derivatives) run native code too; a long function's JIT leaves them
+    /// to its tape (see [`jit::DERIVATIVES_MAX_OPS`]).
+    fn derivatives_native(&self) -> bool {
+        self.is_native()
+    }
+
     /// Time spent so far compiling this evaluator's native code (zero for
     /// evaluators that compile nothing). Renders subtract what lazy
     /// compilation adds to their wall time.

@@ -169,6 +169,24 @@ impl Regional {
     fn for_point(&self, p: [f64; 3]) -> &dyn Evaluator {
         self.for_box(&point_box(p))
     }
+
+    /// The evaluator for gradients and directional derivatives over a box:
+    /// as [`Self::for_box`], except that a region whose answer interprets
+    /// them (a long function's JIT leaves its derivative kinds to its
+    /// whole tape) runs its own pruned tape, which is never longer. Over
+    /// 1000 spheres at 256², the inclusion test's directional derivatives
+    /// ran the whole 14k-op tape.
+    fn for_derivatives(&self, b: &IBox) -> &dyn Evaluator {
+        if !box_within(b, &self.region) {
+            return self.parent.as_ref();
+        }
+        let node = self.smallest_holding(b);
+        if node.own || node.answer.derivatives_native() {
+            node.answer.as_ref()
+        } else {
+            node.tape.as_ref()
+        }
+    }
 }
 
 impl Evaluator for Regional {
@@ -177,7 +195,7 @@ impl Evaluator for Regional {
     }
 
     fn point_grad(&self, p: [f64; 3]) -> Grad {
-        self.for_point(p).point_grad(p)
+        self.for_derivatives(&point_box(p)).point_grad(p)
     }
 
     fn interval(&self, b: [Interval; 3]) -> Interval {
@@ -185,11 +203,11 @@ impl Evaluator for Regional {
     }
 
     fn interval_grad(&self, b: [Interval; 3]) -> IntervalGrad {
-        self.for_box(&b).interval_grad(b)
+        self.for_derivatives(&b).interval_grad(b)
     }
 
     fn interval_dir(&self, b: [Interval; 3], v: [Interval; 3]) -> [Interval; 2] {
-        self.for_box(&b).interval_dir(b, v)
+        self.for_derivatives(&b).interval_dir(b, v)
     }
 
     /// One batch on what answers for the smallest region holding every
@@ -262,6 +280,10 @@ impl Evaluator for Regional {
 
     fn is_native(&self) -> bool {
         self.answer.is_native()
+    }
+
+    fn derivatives_native(&self) -> bool {
+        !self.own && self.answer.derivatives_native()
     }
 
     fn as_regional(&self) -> Option<&Regional> {

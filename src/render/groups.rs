@@ -226,6 +226,7 @@ mod tests {
             prune: true,
             flat: false,
             groups: Default::default(),
+            cells: Default::default(),
             slice_ends: std::sync::Arc::new([]),
             large: false,
         }

@@ -388,6 +388,7 @@ mod tests {
                 prune: false,
                 flat: false,
                 groups: Default::default(),
+                cells: Default::default(),
                 slice_ends: std::sync::Arc::new([]),
                 large: false,
             };

@@ -1,35 +1,16 @@
 //! Shading (Lambert + Blinn-Phong + ambient, linear light) and guaranteed
 //! shadows.
 //!
-//! # Shadows
-//! A point is lit by a shadow-casting light only if the segment from it to
-//! the light is proven free of surface. The segment starts at
-//! `q = p + ε·n` (n the outward unit gradient) with
-//! `ε = max(1e-4 · bounds diagonal, 2 · depth tolerance · |d|)`, so `q` is
-//! off the surface even with the depth error of the hit. The segment (for a
-//! directional light: up to twice the bounds diagonal, then clipped to the
-//! bounds, outside which there is no surface) is bisected; a piece is free
-//! when every object's interval over it (clipped to the bounds) is strictly
-//! positive, or when every object that may vanish there is proven
-//! increasing along the segment (interval gradient · segment direction > 0)
-//! and every object is proven positive at the piece's start (at q: an
-//! interval test of q; further on: the previous piece was proven positive
-//! up to its end inside the bounds). A piece shorter than ε/2
-//! that is not free, or an exhausted budget, means shadow.
-//!
-//! For an included block, one shadow beam first tests all its hit points
-//! at once: the box Q of their q points replaces the single point, and the
-//! same test over `Q + s·(L − Q)` proves the whole block lit (counted in
-//! `shadow_rays_saved`); only if it fails does each pixel test its own
-//! segment. Lights with `shadows: false` run no shadow code.
+//! Shadows are in [`super::shadow`].
 
 use glam::DVec3;
 
-use super::camera::{bounds_box, normalize};
+use super::camera::normalize;
 use super::refine::illinois;
-use super::tracer::Tracer;
+use super::shadow::{light_dir, segment_free};
+use super::tracer::{TileState, Tracer};
 use crate::interval::Interval;
-use crate::interval::boxes::{IBox, box_hull, box_meet, dot as dot_box, normalize_box, point_box};
+use crate::interval::boxes::{IBox, dot as dot_box, normalize_box, point_box};
 use crate::render::stats::RenderStats;
 use crate::scene::LightKind;
 
@@ -39,161 +20,6 @@ pub const AMBIENT: f64 = 0.1;
 pub const SPECULAR: f64 = 0.25;
 /// Blinn-Phong exponent.
 pub const SHININESS: i32 = 32;
-
-const MAX_SHADOW_PIECES: usize = 4000;
-
-/// The far end of a shadow segment.
-#[derive(Copy, Clone, Debug)]
-pub(crate) enum SegEnd {
-    /// A point light's position.
-    Point(DVec3),
-    /// A fixed offset from the start (directional light).
-    Offset(DVec3),
-}
-
-/// The unit direction from `p` towards the light, and the segment end.
-pub(crate) fn light_dir(tr: &Tracer<'_>, kind: LightKind, p: DVec3) -> Option<(DVec3, SegEnd)> {
-    match kind {
-        LightKind::Point(l) => {
-            let l = DVec3::from_array(l);
-            let d = normalize(l - p)?;
-            Some((d, SegEnd::Point(l)))
-        }
-        LightKind::Directional(dir) => {
-            // `-x` is `x * -1.0` bit for bit (both flip the sign only).
-            let d = normalize(-DVec3::from_array(dir))?;
-            Some((d, SegEnd::Offset(d * (2.0 * tr.diag))))
-        }
-    }
-}
-
-/// Whether every segment from a point of `q` to `end` is proven free of
-/// surface. `starts` are the segments' start points (all inside `q`);
-/// they are proven outside every object only if the monotonicity test on
-/// the first piece needs it (one interval evaluation per point and object).
-// One front-to-back loop: every branch reads or sets `front_ok`, which
-// holds only because pieces are popped in order, so the loop stays whole.
-pub(crate) fn segment_free(
-    tr: &Tracer<'_>,
-    q: IBox,
-    starts: &[DVec3],
-    end: SegEnd,
-    min_w: f64,
-    st: &mut RenderStats,
-) -> bool {
-    let delta: IBox = match end {
-        SegEnd::Point(l) => std::array::from_fn(|i| Interval::point(l[i]).sub(q[i])),
-        SegEnd::Offset(o) => point_box(o.to_array()),
-    };
-    let len = delta
-        .iter()
-        .map(|c| c.lo.abs().max(c.hi.abs()))
-        .map(|m| m * m)
-        .sum::<f64>()
-        .sqrt();
-    let bounds = bounds_box(&tr.bounds);
-    let n = tr.evals.len();
-    let mut stack = vec![(0.0f64, 1.0f64)];
-    let mut pieces = 0usize;
-    // Pieces are settled front to back and contiguously, so when a piece
-    // is popped everything before it is free; `front_ok` says, in
-    // addition, that every object is proven positive at the piece's start
-    // on every segment (None at s = 0 until the start points are checked).
-    let mut front_ok: Option<bool> = None;
-    while let Some((a, c)) = stack.pop() {
-        pieces += 1;
-        if pieces > MAX_SHADOW_PIECES {
-            return false;
-        }
-        let s = Interval::new(a, c);
-        let bx: IBox = std::array::from_fn(|i| q[i].add(s.mul(delta[i])));
-        let Some(clip) = box_meet(bx, bounds) else {
-            // Wholly outside the bounds: no surface, but nothing known of f.
-            front_ok = Some(false);
-            continue;
-        };
-        let inside_bounds = clip == bx;
-        let mut maybe: Vec<usize> = Vec::new();
-        for k in 0..n {
-            let f = tr.interval(k, clip, st);
-            if !(f.is_empty() || f.lo > 0.0) {
-                maybe.push(k);
-            }
-        }
-        if maybe.is_empty() {
-            front_ok = Some(inside_bounds);
-            continue;
-        }
-        // A point of one of the segments (the first start's) inside a
-        // solid settles the answer (not free) at once, where the bisection
-        // would otherwise go down to `min_w` at the blocker's surface
-        // before giving up. It never changes a provable answer: every
-        // interval over a box holding that point contains its (negative)
-        // value, so no piece around it could be rejected, and the
-        // monotonicity proof would need f > 0 on that segment.
-        if let Some(s0) = starts.first() {
-            let m = 0.5 * (a + c);
-            // Clamped into the piece's box against rounding (max/min, not
-            // `clamp`, which panics on NaN bounds).
-            let p: [f64; 3] = std::array::from_fn(|i| {
-                let d0 = match end {
-                    SegEnd::Point(l) => l[i] - s0[i],
-                    SegEnd::Offset(o) => o[i],
-                };
-                (s0[i] + m * d0).max(bx[i].lo).min(bx[i].hi)
-            });
-            let in_bounds = (0..3).all(|i| bounds[i].contains(p[i]));
-            if in_bounds && maybe.iter().any(|&k| tr.point(k, p, st) < 0.0) {
-                return false;
-            }
-        }
-        // Positive at the start and increasing along every segment over
-        // the piece: positive on the whole piece.
-        let ok = match front_ok {
-            Some(v) => v,
-            None => {
-                let v = starts
-                    .iter()
-                    .all(|&p| start_state(tr, p.to_array(), st) == Some(true));
-                front_ok = Some(v);
-                v
-            }
-        };
-        if ok {
-            let increasing = maybe
-                .iter()
-                .all(|&k| tr.interval_dir(k, bx, delta, st)[1].lo > 0.0);
-            if increasing {
-                front_ok = Some(inside_bounds);
-                continue;
-            }
-        }
-        if (c - a) * len <= min_w {
-            return false;
-        }
-        let m = 0.5 * (a + c);
-        stack.push((m, c));
-        stack.push((a, m));
-    }
-    true
-}
-
-/// Whether the point q is proven outside every object (Some(true)),
-/// proven inside one (Some(false)), or undecided (None).
-pub(crate) fn start_state(tr: &Tracer<'_>, q: [f64; 3], st: &mut RenderStats) -> Option<bool> {
-    let b = point_box(q);
-    let mut all_pos = true;
-    for k in 0..tr.evals.len() {
-        let f = tr.interval(k, b, st);
-        if f.hi < 0.0 {
-            return Some(false);
-        }
-        if !(f.is_empty() || f.lo > 0.0) {
-            all_pos = false;
-        }
-    }
-    all_pos.then_some(true)
-}
 
 /// The geometry of one hit pixel, ready for shading.
 #[derive(Copy, Clone, Debug)]
@@ -364,32 +190,6 @@ pub(crate) fn mend_singular_normals(
     }
 }
 
-/// Tests one shadow beam for a set of surface points and one light.
-pub(crate) fn shadow_beam(
-    tr: &Tracer<'_>,
-    surfs: &[Surf],
-    kind: LightKind,
-    st: &mut RenderStats,
-) -> bool {
-    let Some(first) = surfs.first() else {
-        return false;
-    };
-    let Some((_, end)) = light_dir(tr, kind, first.p) else {
-        return false;
-    };
-    let mut qb = point_box(first.q.to_array());
-    let mut min_w = f64::INFINITY;
-    for s in surfs {
-        qb = box_hull(qb, point_box(s.q.to_array()));
-        min_w = min_w.min(s.min_w);
-    }
-    let starts: Vec<DVec3> = surfs.iter().map(|s| s.q).collect();
-    // A beam cannot be resolved much below its own cross-section: give up
-    // (and fall back to per-pixel segments) once pieces get that short.
-    let diam = qb.iter().map(|c| c.width() * c.width()).sum::<f64>().sqrt();
-    segment_free(tr, qb, &starts, end, min_w.max(diam), st)
-}
-
 /// Shades one surface point; `lit_by_beam[l]` says a shadow beam already
 /// proved light l visible. Also returns which lights (bit l) face the
 /// point but are shadowed there, for anti-aliasing to find shadow edges.
@@ -397,7 +197,7 @@ pub(crate) fn shade(
     tr: &Tracer<'_>,
     s: &Surf,
     lit_by_beam: &[bool],
-    st: &mut RenderStats,
+    st: &mut TileState,
 ) -> (DVec3, u64) {
     let mut c = s.color * AMBIENT;
     let mut shadowed = 0u64;
@@ -410,7 +210,7 @@ pub(crate) fn shade(
             continue;
         }
         if light.shadows && !lit_by_beam.get(li).copied().unwrap_or(false) {
-            st.shadow_rays += 1;
+            st.stats.shadow_rays += 1;
             if !segment_free(tr, point_box(s.q.to_array()), &[s.q], end, s.min_w, st) {
                 shadowed |= 1u64.checked_shl(li as u32).unwrap_or(0);
                 continue;
@@ -504,6 +304,7 @@ mod tests {
             prune: false,
             flat: false,
             groups: Default::default(),
+            cells: Default::default(),
             slice_ends: std::sync::Arc::new([]),
             large: false,
         };
@@ -550,7 +351,7 @@ mod tests {
                     color: DVec3::from_array(color),
                     grad_len: 1.0,
                 };
-                let mut st = RenderStats::default();
+                let mut st = TileState::default();
                 let (c, _) = shade(&tr, &surf, &[true, true], &mut st);
                 for ch in 0..3 {
                     assert!(

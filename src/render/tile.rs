@@ -8,6 +8,7 @@ use image::Rgb;
 use super::beam::{self, TileRays};
 use super::camera::RayGrid;
 use super::shade::{self, TileSurfs};
+use super::shadow;
 use super::tracer::{PrunedEvals, TileState, Tracer};
 use super::{Class, Method, RenderOptions, plane, ray};
 use crate::interval::Interval;
@@ -329,10 +330,9 @@ fn shadow_beams(
     tr: &Tracer<'_>,
     tile: &TileRays,
     surfs: &TileSurfs,
-    st: &mut TileState,
+    ts: &mut TileState,
 ) -> Vec<bool> {
     let t_shadow = Instant::now();
-    let st = &mut st.stats;
     let nl = tr.lights.len();
     let mut lit_by_beam = vec![false; surfs.len() * nl];
     for b in &tile.included {
@@ -346,7 +346,7 @@ fn shadow_beams(
                 let k = (j * tile.w + i) as usize;
                 let Some(&s) = surfs.get(k) else { continue };
                 let facing =
-                    shade::light_dir(tr, light.kind, s.p).is_some_and(|(l, _)| s.n.dot(l) > 0.0);
+                    shadow::light_dir(tr, light.kind, s.p).is_some_and(|(l, _)| s.n.dot(l) > 0.0);
                 if facing {
                     members.push(k);
                     pts.push(s);
@@ -355,17 +355,17 @@ fn shadow_beams(
             if members.len() < 2 {
                 continue;
             }
-            st.shadow_beams += 1;
-            if shade::shadow_beam(tr, &pts, light.kind, st) {
-                st.shadow_beams_ok += 1;
-                st.shadow_rays_saved += members.len() as u64;
+            ts.stats.shadow_beams += 1;
+            if shadow::shadow_beam(tr, &pts, light.kind, ts) {
+                ts.stats.shadow_beams_ok += 1;
+                ts.stats.shadow_rays_saved += members.len() as u64;
                 for k in members {
                     lit_by_beam[k * nl + li] = true;
                 }
             }
         }
     }
-    st.shadow_cpu_ms += ms_since(t_shadow);
+    ts.stats.shadow_cpu_ms += ms_since(t_shadow);
     lit_by_beam
 }
 
@@ -384,10 +384,9 @@ fn shade_pixels(
     lit_by_beam: &[bool],
     background: [f64; 3],
     opts: &RenderOptions,
-    st: &mut TileState,
+    ts: &mut TileState,
 ) -> Lit {
     let t_shade = Instant::now();
-    let st = &mut st.stats;
     let (n, nl) = (surfs.len(), tr.lights.len());
     let mut linear = vec![background; n];
     let mut shadowed = vec![0u64; n];
@@ -399,7 +398,7 @@ fn shade_pixels(
     for k in 0..n {
         if let Some(s) = surfs.get(k) {
             let t0 = any_shadows.then(Instant::now);
-            let (c, sh) = shade::shade(tr, s, &lit_by_beam[k * nl..(k + 1) * nl], st);
+            let (c, sh) = shade::shade(tr, s, &lit_by_beam[k * nl..(k + 1) * nl], ts);
             shadow_ms += t0.map_or(0.0, ms_since);
             linear[k] = c.to_array();
             shadowed[k] = sh;
@@ -409,8 +408,8 @@ fn shade_pixels(
         }
     }
     // Per-pixel lighting time is dominated by shadow segments.
-    st.shadow_cpu_ms += shadow_ms;
-    st.shade_cpu_ms += (ms_since(t_shade) - shadow_ms).max(0.0);
+    ts.stats.shadow_cpu_ms += shadow_ms;
+    ts.stats.shade_cpu_ms += (ms_since(t_shade) - shadow_ms).max(0.0);
     Lit {
         linear,
         shadowed,

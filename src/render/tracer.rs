@@ -8,6 +8,7 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use super::camera::{CornerRays, RayCamera};
+use super::cells::CellTapes;
 use super::groups::TileGroups;
 use super::stats::RenderStats;
 use crate::eval::regional::Regional;
@@ -77,6 +78,9 @@ pub(crate) struct Tracer<'a> {
     /// Evaluators pruned to groups of tiles, which tiles prune theirs
     /// from (shared by the tracers of one camera).
     pub groups: Arc<TileGroups>,
+    /// Evaluators pruned to the cells of an octree over the bounds, for
+    /// shadow segments (shared by every tracer of one render).
+    pub cells: Arc<CellTapes>,
     /// The interior ends, in increasing order, of the slices of the tile
     /// these evaluators are pruned to (empty outside such a tile).
     pub slice_ends: Arc<[f64]>,
@@ -167,6 +171,7 @@ impl<'a> Tracer<'a> {
             prune,
             flat: constant_along_rays(&cam, scene),
             groups: Arc::default(),
+            cells: Arc::default(),
             slice_ends: Arc::new([]),
             large,
         }
@@ -181,6 +186,7 @@ impl<'a> Tracer<'a> {
             live_ops: self.live_ops.clone(),
             tapes: self.tapes.clone(),
             groups: Arc::default(),
+            cells: Arc::clone(&self.cells),
             slice_ends: Arc::new([]),
             ..*self
         }
@@ -202,6 +208,7 @@ impl<'a> Tracer<'a> {
             live_ops,
             tapes: self.tapes.clone(),
             groups: Arc::clone(&self.groups),
+            cells: Arc::clone(&self.cells),
             slice_ends: Arc::clone(&self.slice_ends),
             ..*self
         }
@@ -452,12 +459,23 @@ impl<'a> Tracer<'a> {
         if before < min_ops || (min_ops >= RAY_PRUNE_MIN_OPS && answer.is_native()) {
             return None;
         }
+        // Where the answer runs native code but leaves derivatives to its
+        // tape (a long function's JIT), any shrinking pays: the region
+        // keeps its tape for gradients and directional derivatives (see
+        // `Regional`) and for its sub-regions to prune from.
         let g = gain(answer.as_ref());
-        let p = tape.prune_to_at_most(region, before / g, &mut st.workspace)?;
+        let any = answer.is_native() && !answer.derivatives_native();
+        let most = if any { tape.len() - 1 } else { before / g };
+        let p = tape.prune_to_at_most(region, most, &mut st.workspace)?;
         let after = p.tape.len();
-        st.stats.pruned_ops_before += before as u64;
-        st.stats.pruned_ops_after += after as u64;
-        let pruned = Regional::new(region, p.tape, Arc::clone(source));
+        let pruned = if after * g <= before {
+            st.stats.pruned_ops_before += before as u64;
+            st.stats.pruned_ops_after += after as u64;
+            Regional::new(region, p.tape, Arc::clone(source))
+        } else {
+            let answer = (Arc::clone(answer), before);
+            Regional::delegating(region, p.tape, answer, Arc::clone(source))
+        };
         Some((Arc::new(pruned) as Arc<dyn Evaluator>, after))
     }
 

@@ -245,3 +245,122 @@ fn pruning_draws_what_the_whole_function_draws() {
         }
     }
 }
+
+/// Shadows through a union of 300 spheres (about 3000 ops, a long
+/// function: its segments' pieces run the tapes of octree cells, see
+/// `render::cells`) agree with exact segment–sphere distances: a pixel is
+/// lit only where its shadow segment clears every sphere (soundness, up to
+/// the offset the segment starts at), and every pixel whose segment clears
+/// them all by a margin is lit.
+#[test]
+fn shadows_through_a_large_union_match_exact_segment_tests() {
+    let mut rng = ibeam::ir::random::Rng::new(11);
+    let r = 0.06;
+    let centres: Vec<[f64; 3]> = (0..300)
+        .map(|_| [(); 3].map(|_| rng.range(-0.9, 0.9)))
+        .collect();
+    let balls: Vec<String> = centres
+        .iter()
+        .map(|[x, y, z]| format!("translate(sphere({r}), {x}, {y}, {z})"))
+        .collect();
+    let light = [-0.4, -1.0, -0.6];
+    let text = format!(
+        "object s = union({});\n\
+         camera {{ {CORNER_VIEW} }}\n\
+         light {{ direction = ({}, {}, {}); shadows = true; }}\n\
+         bounds = (-1, -1, -1) .. (1, 1, 1);\n",
+        balls.join(", "),
+        light[0],
+        light[1],
+        light[2]
+    );
+    let sc = ibeam::lang::load_scene_source("union.ib", &text).unwrap();
+    let size = 96;
+    let evals = ibeam::eval::build_evaluators(&sc, ibeam::eval::EvalKind::Jit).unwrap();
+    let out = run(&sc, evals, &opts(size, size, Method::Beam));
+    let cam = RayCamera::new(&sc.camera, size, size).unwrap();
+    let norm = |v: [f64; 3]| {
+        let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        v.map(|c| c / l)
+    };
+    let to_light = norm(light.map(|c| -c));
+    let color = sc.objects[0].color;
+    let (mut lit, mut dark, mut checked) = (0, 0, 0);
+    for j in 0..size {
+        for i in 0..size {
+            let k = (j * size + i) as usize;
+            if !out.hit_mask[k] {
+                continue;
+            }
+            let ray = cam.pixel_ray(i, j);
+            let p = ray.at(out.depth_t[k]);
+            // The segment starts this far off the surface (see
+            // `render::shadow`); distances are 1-Lipschitz, so its
+            // clearance is within `eps` of the one from `p`.
+            let dl = ray.dm.iter().map(|c| c * c).sum::<f64>().sqrt();
+            let eps = (1e-4 * 12f64.sqrt()).max(2.0 * cam.tolerance(out.depth_t[k]) * dl) * 1.01;
+            // The sphere the hit lies on, and its outward normal there.
+            let dist = |c: &[f64; 3]| (0..3).map(|a| (p[a] - c[a]).powi(2)).sum::<f64>().sqrt();
+            let own = centres
+                .iter()
+                .min_by(|a, b| dist(a).total_cmp(&dist(b)))
+                .unwrap();
+            let n = norm(std::array::from_fn(|a| p[a] - own[a]));
+            let facing: f64 = (0..3).map(|a| n[a] * to_light[a]).sum();
+            if facing < 0.2 {
+                continue;
+            }
+            // The segment's clearance: its distance to each sphere's
+            // surface, up to where it leaves the bounds.
+            let exit = (0..3)
+                .map(|a| {
+                    let d = to_light[a];
+                    if d > 0.0 {
+                        (1.0 - p[a]) / d
+                    } else {
+                        (-1.0 - p[a]) / d
+                    }
+                })
+                .fold(f64::INFINITY, f64::min);
+            let clearance = centres
+                .iter()
+                .filter(|c| !std::ptr::eq(*c, own))
+                .map(|c| {
+                    let w: [f64; 3] = std::array::from_fn(|a| c[a] - p[a]);
+                    let s = (0..3)
+                        .map(|a| w[a] * to_light[a])
+                        .sum::<f64>()
+                        .clamp(0.0, exit);
+                    let q: [f64; 3] = std::array::from_fn(|a| p[a] + s * to_light[a]);
+                    dist_between(&q, c) - r
+                })
+                .fold(f64::INFINITY, f64::min);
+            // Lit pixels are brighter than ambient light alone.
+            let ambient = color[0] * AMBIENT;
+            let is_lit = f64::from(out.linear[k][0]) > ambient * 1.5;
+            if is_lit {
+                lit += 1;
+                assert!(
+                    clearance > -eps,
+                    "pixel ({i}, {j}) lit through a sphere ({clearance})"
+                );
+            } else {
+                dark += 1;
+            }
+            if clearance > eps + 0.02 {
+                checked += 1;
+                assert!(
+                    is_lit,
+                    "pixel ({i}, {j}) dark, its segment clears by {clearance}"
+                );
+            }
+        }
+    }
+    assert!(lit > 500 && dark > 100, "{lit} lit, {dark} dark pixels");
+    assert!(checked > 500, "{checked} pixels checked for light");
+}
+
+/// The distance between two points.
+fn dist_between(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt()
+}

@@ -285,6 +285,10 @@ impl Evaluator for JitEvaluator {
         true
     }
 
+    fn derivatives_native(&self) -> bool {
+        !(self.background && self.inner.long)
+    }
+
     fn compile_time(&self) -> Duration {
         self.compile_times().iter().map(|(_, t)| *t).sum()
     }

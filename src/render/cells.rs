@@ -1,0 +1,227 @@
+//! Evaluators pruned to the cells of a loose octree over the bounds,
+//! shared by every tile and thread of a render.
+//!
+//! Tiles prune to their own beams (`render::slices`), but a shadow
+//! segment leaves its tile's beam at once: it used to prune from the whole
+//! function, piece after piece, and on a union of 1000 spheres those
+//! prunings and the evaluations they did not shorten took 40 s of a 256²
+//! render. A segment's pieces instead take the evaluators of the smallest
+//! cell holding them, pruned once per render from their parent cell's.
+//!
+//! Level `L` cuts the bounds into `2^L` cells along each axis. A cell's
+//! region is the cell widened by half its size on every side, so that any
+//! box no wider than a cell lies in the region of the cell holding its
+//! centre, and a cell's region lies in its parent's. Levels stop at
+//! [`MAX_LEVEL`] (at most 32³ cells, each holding tapes of a few hundred
+//! ops at that size), and a cell whose parent's functions are all shorter
+//! than [`CELL_MIN_OPS`] keeps its parent's. What a cell holds depends only
+//! on its region, never on which thread built it, so images and counters do
+//! not depend on the thread count.
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
+
+use super::tracer::{PRUNE_MIN_OPS, PrunedEvals, TileState, Tracer};
+use crate::interval::Interval;
+use crate::interval::boxes::{IBox, box_within};
+
+/// The finest level of cells.
+pub(crate) const MAX_LEVEL: u32 = 5;
+/// Functions shorter than this are not pruned further down the tree.
+const CELL_MIN_OPS: usize = 2 * PRUNE_MIN_OPS;
+
+/// A cell: its level and its index along each axis.
+type CellKey = (u32, [u32; 3]);
+
+/// A cell's evaluators (`None`: the whole functions'), built once by the
+/// first tile that asks.
+type Slot = Arc<OnceLock<Option<PrunedEvals>>>;
+
+/// The cells of one render, built as segments ask for them.
+#[derive(Default)]
+pub(crate) struct CellTapes {
+    cells: Mutex<HashMap<CellKey, Slot>>,
+}
+
+impl CellTapes {
+    /// The evaluators of the smallest cell whose region holds `b`, built
+    /// now if no tile has asked yet; `None` when no cell's region holds it
+    /// (it leaves the bounds) or nothing prunes there.
+    pub(crate) fn holding(
+        &self,
+        tr: &Tracer<'_>,
+        b: &IBox,
+        st: &mut TileState,
+    ) -> Option<PrunedEvals> {
+        let key = smallest_cell(tr, b)?;
+        self.evals(tr, key, st)
+    }
+
+    // Cell `key`'s evaluators, building it (and its ancestors) if needed.
+    fn evals(&self, tr: &Tracer<'_>, key: CellKey, st: &mut TileState) -> Option<PrunedEvals> {
+        let slot = {
+            let mut map = self.cells.lock().unwrap_or_else(|e| e.into_inner());
+            Arc::clone(map.entry(key).or_default())
+        };
+        slot.get_or_init(|| self.build(tr, key, st)).clone()
+    }
+
+    // Prunes cell `key`'s functions from its parent's.
+    fn build(
+        &self,
+        tr: &Tracer<'_>,
+        (level, at): CellKey,
+        st: &mut TileState,
+    ) -> Option<PrunedEvals> {
+        let parent = if level == 0 {
+            None
+        } else {
+            self.evals(tr, (level - 1, at.map(|i| i / 2)), st)
+        };
+        let local;
+        let from = match &parent {
+            Some((evals, live_ops)) => {
+                if live_ops.iter().all(|&n| n < CELL_MIN_OPS) {
+                    return parent;
+                }
+                local = tr.with_evals(evals, live_ops.clone());
+                &local
+            }
+            None => tr,
+        };
+        from.pruned_to(cell_region(tr, (level, at)), st).or(parent)
+    }
+}
+
+// The region of cell `key`: the cell widened by half its size each side.
+fn cell_region(tr: &Tracer<'_>, (level, at): CellKey) -> IBox {
+    let n = f64::from(1u32 << level);
+    std::array::from_fn(|i| {
+        let (lo, hi) = (tr.bounds.min[i], tr.bounds.max[i]);
+        let size = (hi - lo) / n;
+        let i0 = f64::from(at[i]);
+        Interval::new(lo + (i0 - 0.5) * size, lo + (i0 + 1.5) * size)
+    })
+}
+
+// The deepest cell whose region holds `b`: at the level whose cells are
+// as wide as `b` (or the finest), the one holding its centre, or up the
+// levels where rounding or the bounds' edge leave `b` outside it.
+fn smallest_cell(tr: &Tracer<'_>, b: &IBox) -> Option<CellKey> {
+    let mut level = MAX_LEVEL;
+    for (i, c) in b.iter().enumerate() {
+        let span = tr.bounds.max[i] - tr.bounds.min[i];
+        let w = c.width();
+        if span.is_nan() || span <= 0.0 || !w.is_finite() {
+            return None;
+        }
+        // Cells of level L are span / 2^L wide.
+        while level > 0 && w > span / f64::from(1u32 << level) {
+            level -= 1;
+        }
+    }
+    loop {
+        let n = 1u32 << level;
+        let at: [u32; 3] = std::array::from_fn(|i| {
+            let span = tr.bounds.max[i] - tr.bounds.min[i];
+            let c = (b[i].mid() - tr.bounds.min[i]) / span * f64::from(n);
+            // NaN and out-of-range centres clamp to the edge cells (the
+            // region test below decides).
+            c.floor().max(0.0).min(f64::from(n - 1)) as u32
+        });
+        if box_within(b, &cell_region(tr, (level, at))) {
+            return Some((level, at));
+        }
+        if level == 0 {
+            return None;
+        }
+        level -= 1;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ir::random::Rng;
+    use crate::render::camera::RayCamera;
+    use crate::scene::{Bounds, Camera};
+
+    fn tracer() -> Tracer<'static> {
+        Tracer {
+            cam: RayCamera::new(&Camera::default(), 8, 8).unwrap(),
+            evals: &[],
+            colors: vec![],
+            lights: &[],
+            bounds: Bounds {
+                min: [-1.0, -0.5, -2.0],
+                max: [1.5, 1.0, 0.25],
+            },
+            diag: 4.0,
+            live_ops: vec![],
+            tapes: vec![],
+            prune: true,
+            flat: false,
+            groups: Default::default(),
+            cells: Default::default(),
+            slice_ends: std::sync::Arc::new([]),
+            large: false,
+        }
+    }
+
+    // A box's cell holds it, and no cell a level deeper does: the one
+    // holding its centre is narrower than the box, or leaves it out. Each
+    // cell's region lies in its parent's, so that cells prune from their
+    // parents' tapes.
+    #[test]
+    fn the_smallest_cell_holds_the_box_and_lies_in_its_parent() {
+        let tr = tracer();
+        let mut rng = Rng::new(3);
+        let mut levels = [0usize; MAX_LEVEL as usize + 1];
+        for _ in 0..2000 {
+            let w = 2.5 * 0.5f64.powf(rng.range(0.0, 9.0));
+            let b: IBox = std::array::from_fn(|i| {
+                let c = rng.range(tr.bounds.min[i] - 0.2, tr.bounds.max[i] + 0.2);
+                let h = w * rng.range(0.0, 0.5);
+                Interval::new(c - h, c + h)
+            });
+            let Some((level, at)) = smallest_cell(&tr, &b) else {
+                // Only a box leaving every region: the level-0 one.
+                assert!(!box_within(&b, &cell_region(&tr, (0, [0; 3]))), "{b:?}");
+                continue;
+            };
+            levels[level as usize] += 1;
+            let region = cell_region(&tr, (level, at));
+            assert!(box_within(&b, &region), "{b:?} outside {region:?}");
+            if level > 0 {
+                let parent = cell_region(&tr, (level - 1, at.map(|i| i / 2)));
+                let inside = (0..3).all(|i| {
+                    let slack = 1e-12 * (parent[i].width() + 1.0);
+                    parent[i].lo - slack <= region[i].lo && region[i].hi <= parent[i].hi + slack
+                });
+                assert!(inside, "{region:?} outside its parent {parent:?}");
+            }
+            if level < MAX_LEVEL {
+                let n = f64::from(1u32 << (level + 1));
+                let fits = (0..3).all(|i| {
+                    let span = tr.bounds.max[i] - tr.bounds.min[i];
+                    b[i].width() <= span / n
+                });
+                let at: [u32; 3] = std::array::from_fn(|i| {
+                    let span = tr.bounds.max[i] - tr.bounds.min[i];
+                    let c = (b[i].mid() - tr.bounds.min[i]) / span * n;
+                    c.floor().max(0.0).min(n - 1.0) as u32
+                });
+                let deeper = cell_region(&tr, (level + 1, at));
+                assert!(
+                    !fits || !box_within(&b, &deeper),
+                    "{b:?} fits level {}",
+                    level + 1
+                );
+            }
+        }
+        assert!(
+            levels.iter().all(|&n| n > 20),
+            "boxes per level: {levels:?}"
+        );
+    }
+}

@@ -1,0 +1,355 @@
+//! Guaranteed shadows.
+//!
+//! A point is lit by a shadow-casting light only if the segment from it to
+//! the light is proven free of surface. The segment starts at
+//! `q = p + ε·n` (n the outward unit gradient) with
+//! `ε = max(1e-4 · bounds diagonal, 2 · depth tolerance · |d|)`, so `q` is
+//! off the surface even with the depth error of the hit. The segment (for a
+//! directional light: up to twice the bounds diagonal, then clipped to the
+//! bounds, outside which there is no surface) is bisected; a piece is free
+//! when every object's interval over it (clipped to the bounds) is strictly
+//! positive, or when every object that may vanish there is proven
+//! increasing along the segment (interval gradient · segment direction > 0)
+//! and every object is proven positive at the piece's start (at q: an
+//! interval test of q; further on: the previous piece was proven positive
+//! up to its end inside the bounds). A piece shorter than ε/2
+//! that is not free, or an exhausted budget, means shadow.
+//!
+//! As along a camera ray (see `super::ray`), a piece that may hold surface
+//! and is several times narrower than the one the functions were last
+//! pruned to has its sub-pieces swept on functions pruned to its box: a
+//! segment through a union of many objects soon meets only the one or two
+//! near it, where every piece used to run the whole function (and, for a
+//! function too long for native derivatives, its whole tape for the
+//! monotonicity test).
+//!
+//! For an included block, one shadow beam first tests all its hit points
+//! at once: the box Q of their q points replaces the single point, and the
+//! same test over `Q + s·(L − Q)` proves the whole block lit (counted in
+//! `shadow_rays_saved`); only if it fails does each pixel test its own
+//! segment. Lights with `shadows: false` run no shadow code.
+
+use glam::DVec3;
+
+use super::camera::{bounds_box, normalize};
+use super::probe;
+use super::shade::Surf;
+use super::tracer::{TileState, Tracer};
+use crate::interval::Interval;
+use crate::interval::boxes::{IBox, box_hull, box_meet, point_box};
+use crate::render::stats::RenderStats;
+use crate::scene::LightKind;
+
+const MAX_SHADOW_PIECES: usize = 4000;
+
+/// The far end of a shadow segment.
+#[derive(Copy, Clone, Debug)]
+pub(crate) enum SegEnd {
+    /// A point light's position.
+    Point(DVec3),
+    /// A fixed offset from the start (directional light).
+    Offset(DVec3),
+}
+
+/// The unit direction from `p` towards the light, and the segment end.
+pub(crate) fn light_dir(tr: &Tracer<'_>, kind: LightKind, p: DVec3) -> Option<(DVec3, SegEnd)> {
+    match kind {
+        LightKind::Point(l) => {
+            let l = DVec3::from_array(l);
+            let d = normalize(l - p)?;
+            Some((d, SegEnd::Point(l)))
+        }
+        LightKind::Directional(dir) => {
+            // `-x` is `x * -1.0` bit for bit (both flip the sign only).
+            let d = normalize(-DVec3::from_array(dir))?;
+            Some((d, SegEnd::Offset(d * (2.0 * tr.diag))))
+        }
+    }
+}
+
+/// The monotonicity test of a piece is put off to its halves while the
+/// functions' derivatives run a tape longer than this (a long function's
+/// JIT interprets them) and the piece is wider than [`MONOTONE_ALWAYS`]
+/// (a fraction of the segment). It never loses a proof: what it proves
+/// on a piece it proves on the piece's halves (interval arithmetic is
+/// inclusion-isotone), the first half starts where the piece did, and the
+/// second where the first, proven positive and increasing, ends (inside
+/// the bounds or not). Meanwhile the halves
+/// are pruned, and the test runs a few hundred ops instead of the whole
+/// tape: on 1000 spheres the test over the first, long pieces of each
+/// segment cost most of the render.
+const MONOTONE_DEFER_OPS: usize = 2048;
+/// See [`MONOTONE_DEFER_OPS`].
+const MONOTONE_ALWAYS: f64 = 1.0 / 64.0;
+
+/// A piece this many times narrower than the one whose cell's evaluators
+/// (see `render::cells`) the sweep runs takes its own cell's.
+const SEGMENT_CELL_RATIO: f64 = 2.0;
+
+/// Tests one shadow beam for a set of surface points and one light.
+pub(crate) fn shadow_beam(
+    tr: &Tracer<'_>,
+    surfs: &[Surf],
+    kind: LightKind,
+    st: &mut TileState,
+) -> bool {
+    let Some(first) = surfs.first() else {
+        return false;
+    };
+    let Some((_, end)) = light_dir(tr, kind, first.p) else {
+        return false;
+    };
+    let mut qb = point_box(first.q.to_array());
+    let mut min_w = f64::INFINITY;
+    for s in surfs {
+        qb = box_hull(qb, point_box(s.q.to_array()));
+        min_w = min_w.min(s.min_w);
+    }
+    let starts: Vec<DVec3> = surfs.iter().map(|s| s.q).collect();
+    // A beam cannot be resolved much below its own cross-section: give up
+    // (and fall back to per-pixel segments) once pieces get that short.
+    let diam = qb.iter().map(|c| c.width() * c.width()).sum::<f64>().sqrt();
+    segment_free(tr, qb, &starts, end, min_w.max(diam), st)
+}
+
+/// Whether every segment from a point of `q` to `end` is proven free of
+/// surface. `starts` are the segments' start points (all inside `q`);
+/// they are proven outside every object only if the monotonicity test on
+/// the first piece needs it (one interval evaluation per point and object).
+pub(crate) fn segment_free(
+    tr: &Tracer<'_>,
+    q: IBox,
+    starts: &[DVec3],
+    end: SegEnd,
+    min_w: f64,
+    st: &mut TileState,
+) -> bool {
+    let delta: IBox = match end {
+        SegEnd::Point(l) => std::array::from_fn(|i| Interval::point(l[i]).sub(q[i])),
+        SegEnd::Offset(o) => point_box(o.to_array()),
+    };
+    let len = delta
+        .iter()
+        .map(|c| c.lo.abs().max(c.hi.abs()))
+        .map(|m| m * m)
+        .sum::<f64>()
+        .sqrt();
+    let seg = Segments {
+        q,
+        delta,
+        len,
+        starts,
+        end,
+        min_w,
+        bounds: bounds_box(&tr.bounds),
+    };
+    let mut sweep = Sweep {
+        pieces: 0,
+        front_ok: None,
+    };
+    // The sweep starts from the pieces of bisection level k, about an
+    // eighth of the bounds' diagonal long, rather than from the whole
+    // segment: the same pieces that bisection reaches, in the same order,
+    // so the same proofs (what a piece's tests prove they prove on its
+    // halves), without evaluating the function over boxes spanning the
+    // bounds (on 1000 spheres, the whole function's native code over a
+    // dozen such boxes per segment).
+    let levels = (len / (tr.diag / 8.0)).log2().ceil();
+    let levels = if levels.is_finite() {
+        levels.clamp(0.0, 6.0) as u32
+    } else {
+        0
+    };
+    let pieces = probe::equal_pieces(0.0, 1.0, 1 << levels);
+    seg.free(tr, pieces, f64::INFINITY, &mut sweep, st)
+}
+
+// The segments from the points of `q` along `delta` (`len` long at most),
+// with what their sweep reads.
+struct Segments<'s> {
+    q: IBox,
+    delta: IBox,
+    len: f64,
+    starts: &'s [DVec3],
+    end: SegEnd,
+    min_w: f64,
+    bounds: IBox,
+}
+
+// The state of one front-to-back sweep, across nested calls.
+struct Sweep {
+    pieces: usize,
+    // Pieces are settled front to back and contiguously, so when a piece
+    // is popped everything before it is free; `front_ok` says, in
+    // addition, that every object is proven positive at the piece's start
+    // on every segment (None at s = 0 until the start points are checked).
+    front_ok: Option<bool>,
+}
+
+impl Segments<'_> {
+    // The front-to-back bisection over the pieces on `stack` (nearest
+    // last), with `tr`'s functions those of the cell holding a piece
+    // `scope` wide (infinite: the whole functions); whether every piece is
+    // free. A piece `SEGMENT_CELL_RATIO` times narrower than `scope` is
+    // swept, with its sub-pieces, by a nested call on the evaluators of
+    // the smallest cell holding it. Pruning is exact, so the nesting changes the cost
+    // of the evaluations and the tightness of their intervals, not the
+    // order in which pieces are visited.
+    // One front-to-back loop: every branch reads or sets `front_ok`, which
+    // holds only because pieces are popped in order, so the loop stays whole.
+    fn free(
+        &self,
+        tr: &Tracer<'_>,
+        mut stack: Vec<(f64, f64)>,
+        mut scope: f64,
+        sw: &mut Sweep,
+        st: &mut TileState,
+    ) -> bool {
+        let n = tr.evals.len();
+        while let Some((a, c)) = stack.pop() {
+            sw.pieces += 1;
+            if sw.pieces > MAX_SHADOW_PIECES {
+                return false;
+            }
+            let s = Interval::new(a, c);
+            let bx: IBox = std::array::from_fn(|i| self.q[i].add(s.mul(self.delta[i])));
+            let Some(clip) = box_meet(bx, self.bounds) else {
+                // Wholly outside the bounds: no surface, but nothing known of f.
+                sw.front_ok = Some(false);
+                continue;
+            };
+            // A piece narrower than the current cell's by the ratio is
+            // swept, with its sub-pieces, on its own cell's evaluators.
+            if tr.prune && tr.large && (c - a) * SEGMENT_CELL_RATIO <= scope {
+                if let Some((evals, live_ops)) = tr.cells.holding(tr, &clip, st) {
+                    let local = tr.with_evals(&evals, live_ops);
+                    if !self.free(&local, vec![(a, c)], c - a, sw, st) {
+                        return false;
+                    }
+                    continue;
+                }
+                // A piece that no cell holds looks again when pieces are
+                // narrower by the same ratio.
+                scope = c - a;
+            }
+            let inside_bounds = clip == bx;
+            let mut maybe: Vec<usize> = Vec::new();
+            for k in 0..n {
+                let f = tr.interval(k, clip, &mut st.stats);
+                if !(f.is_empty() || f.lo > 0.0) {
+                    maybe.push(k);
+                }
+            }
+            if maybe.is_empty() {
+                sw.front_ok = Some(inside_bounds);
+                continue;
+            }
+            match self.piece(tr, (a, c), bx, &maybe, sw, &mut st.stats) {
+                Piece::Blocked => return false,
+                // Positive at its start and increasing over its whole box
+                // (not only the part inside the bounds): positive at its end.
+                Piece::Increasing => sw.front_ok = Some(true),
+                Piece::Open if (c - a) * self.len <= self.min_w => return false,
+                Piece::Open => {
+                    let m = 0.5 * (a + c);
+                    stack.push((m, c));
+                    stack.push((a, m));
+                }
+            }
+        }
+        true
+    }
+
+    // What the tests beyond the interval one prove of the piece `[a, c]`
+    // (box `bx`), where the objects `maybe` may vanish.
+    fn piece(
+        &self,
+        tr: &Tracer<'_>,
+        (a, c): (f64, f64),
+        bx: IBox,
+        maybe: &[usize],
+        sw: &mut Sweep,
+        st: &mut RenderStats,
+    ) -> Piece {
+        // A point of one of the segments (the first start's) inside a
+        // solid settles the answer (not free) at once, where the bisection
+        // would otherwise go down to `min_w` at the blocker's surface
+        // before giving up. It never changes a provable answer: every
+        // interval over a box holding that point contains its (negative)
+        // value, so no piece around it could be rejected, and the
+        // monotonicity proof would need f > 0 on that segment.
+        if let Some(s0) = self.starts.first() {
+            let m = 0.5 * (a + c);
+            // Clamped into the piece's box against rounding (max/min, not
+            // `clamp`, which panics on NaN bounds).
+            let p: [f64; 3] = std::array::from_fn(|i| {
+                let d0 = match self.end {
+                    SegEnd::Point(l) => l[i] - s0[i],
+                    SegEnd::Offset(o) => o[i],
+                };
+                (s0[i] + m * d0).max(bx[i].lo).min(bx[i].hi)
+            });
+            let in_bounds = (0..3).all(|i| self.bounds[i].contains(p[i]));
+            if in_bounds && maybe.iter().any(|&k| tr.point(k, p, st) < 0.0) {
+                return Piece::Blocked;
+            }
+        }
+        // Positive at the start and increasing along every segment over
+        // the piece: positive on the whole piece.
+        let ok = match sw.front_ok {
+            Some(v) => v,
+            None => {
+                let v = self
+                    .starts
+                    .iter()
+                    .all(|&p| start_state(tr, p.to_array(), st) == Some(true));
+                sw.front_ok = Some(v);
+                v
+            }
+        };
+        // The monotonicity test waits for narrower pieces while it would
+        // run a long tape (see `MONOTONE_DEFER_OPS`).
+        let affordable = |k: usize| {
+            c - a <= MONOTONE_ALWAYS
+                || tr.evals[k].derivatives_native()
+                || tr.live_ops[k] <= MONOTONE_DEFER_OPS
+        };
+        if ok
+            && maybe.iter().all(|&k| affordable(k))
+            && maybe
+                .iter()
+                .all(|&k| tr.interval_dir(k, bx, self.delta, st)[1].lo > 0.0)
+        {
+            return Piece::Increasing;
+        }
+        Piece::Open
+    }
+}
+
+// What `Segments::piece` proved.
+enum Piece {
+    // A point of a segment lies inside a solid: shadow.
+    Blocked,
+    // Positive at its start and increasing along every segment: no
+    // surface on the piece.
+    Increasing,
+    // Neither: bisect.
+    Open,
+}
+
+/// Whether the point q is proven outside every object (Some(true)),
+/// proven inside one (Some(false)), or undecided (None).
+pub(crate) fn start_state(tr: &Tracer<'_>, q: [f64; 3], st: &mut RenderStats) -> Option<bool> {
+    let b = point_box(q);
+    let mut all_pos = true;
+    for k in 0..tr.evals.len() {
+        let f = tr.interval(k, b, st);
+        if f.hi < 0.0 {
+            return Some(false);
+        }
+        if !(f.is_empty() || f.lo > 0.0) {
+            all_pos = false;
+        }
+    }
+    all_pos.then_some(true)
+}
