@@ -143,29 +143,10 @@ fn smallest_cell(tr: &Tracer<'_>, b: &IBox) -> Option<CellKey> {
 mod tests {
     use super::*;
     use crate::ir::random::Rng;
-    use crate::render::camera::RayCamera;
-    use crate::scene::{Bounds, Camera};
+    use crate::scene::Camera;
 
     fn tracer() -> Tracer<'static> {
-        Tracer {
-            cam: RayCamera::new(&Camera::default(), 8, 8).unwrap(),
-            evals: &[],
-            colors: vec![],
-            lights: &[],
-            bounds: Bounds {
-                min: [-1.0, -0.5, -2.0],
-                max: [1.5, 1.0, 0.25],
-            },
-            diag: 4.0,
-            live_ops: vec![],
-            tapes: vec![],
-            prune: true,
-            flat: false,
-            groups: Default::default(),
-            cells: Default::default(),
-            slice_ends: std::sync::Arc::new([]),
-            large: false,
-        }
+        Tracer::for_tests(&Camera::default(), 8)
     }
 
     // A box's cell holds it, and no cell a level deeper does: the one

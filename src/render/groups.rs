@@ -207,29 +207,10 @@ fn beam_range(tr: &Tracer<'_>, xs: (f64, f64), ys: (f64, f64)) -> Option<Interva
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::camera::RayCamera;
-    use crate::scene::{Bounds, Camera, Projection};
+    use crate::scene::{Camera, Projection};
 
     fn tracer(camera: &Camera, size: u32) -> Tracer<'static> {
-        Tracer {
-            cam: RayCamera::new(camera, size, size).unwrap(),
-            evals: &[],
-            colors: vec![],
-            lights: &[],
-            bounds: Bounds {
-                min: [-1.0, -0.5, -2.0],
-                max: [1.5, 1.0, 0.25],
-            },
-            diag: 4.0,
-            live_ops: vec![],
-            tapes: vec![],
-            prune: true,
-            flat: false,
-            groups: Default::default(),
-            cells: Default::default(),
-            slice_ends: std::sync::Arc::new([]),
-            large: false,
-        }
+        Tracer::for_tests(camera, size)
     }
 
     // Every pixel's clipped range lies in its group's range, and every

@@ -552,3 +552,30 @@ fn constant_along_rays(cam: &RayCamera, scene: &Scene) -> bool {
             (0..3).all(|i| !uses[i] || cam.d0[i] == 0.0)
         })
 }
+
+#[cfg(test)]
+impl Tracer<'static> {
+    /// A tracer with no objects or lights through `camera` at
+    /// `size`², over bounds that are not a cube and not centred.
+    pub(crate) fn for_tests(camera: &crate::scene::Camera, size: u32) -> Tracer<'static> {
+        Tracer {
+            cam: RayCamera::new(camera, size, size).unwrap(),
+            evals: &[],
+            colors: vec![],
+            lights: &[],
+            bounds: Bounds {
+                min: [-1.0, -0.5, -2.0],
+                max: [1.5, 1.0, 0.25],
+            },
+            diag: 4.0,
+            live_ops: vec![],
+            tapes: vec![],
+            prune: true,
+            flat: false,
+            groups: Default::default(),
+            cells: Default::default(),
+            slice_ends: Arc::new([]),
+            large: false,
+        }
+    }
+}
