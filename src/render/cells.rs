@@ -1,25 +1,29 @@
-//! Evaluators pruned to the cells of a loose octree over the bounds,
-//! shared by every tile and thread of a render.
+//! Evaluators pruned to the cells of a loose octree over the bounds, for
+//! a tile's shadow segments.
 //!
 //! Tiles prune to their own beams (`render::slices`), but a shadow
-//! segment leaves its tile's beam at once: it used to prune from the whole
-//! function, piece after piece, and on a union of 1000 spheres those
-//! prunings and the evaluations they did not shorten took 40 s of a 256²
+//! segment leaves its tile's beam at once: it used to run the whole
+//! function, and on a union of 1000 spheres that took 40 s of a 256²
 //! render. A segment's pieces instead take the evaluators of the smallest
-//! cell holding them, pruned once per render from their parent cell's.
+//! cell holding them, each cell pruned once per tile from its parent
+//! cell's. A tile's segments start close together and run parallel (or
+//! towards one point light), so they meet the same few cells.
 //!
 //! Level `L` cuts the bounds into `2^L` cells along each axis. A cell's
 //! region is the cell widened by half its size on every side, so that any
 //! box no wider than a cell lies in the region of the cell holding its
 //! centre, and a cell's region lies in its parent's. Levels stop at
-//! [`MAX_LEVEL`] (at most 32³ cells, each holding tapes of a few hundred
-//! ops at that size), and a cell whose parent's functions are all shorter
-//! than [`CELL_MIN_OPS`] keeps its parent's. What a cell holds depends only
-//! on its region, never on which thread built it, so images and counters do
-//! not depend on the thread count.
+//! [`MAX_LEVEL`], and a cell whose parent's functions are all shorter than
+//! [`CELL_MIN_OPS`] keeps its parent's.
+//!
+//! The cells belong to the tile (its `TileState`), not to the render:
+//! shared between threads, the cells of a megapixel's segments held about
+//! 850 MB of tapes, and a render-wide budget would make which cells exist,
+//! and so which tape answers, depend on the order the threads asked in.
+//! A tile builds at most [`CELL_TILE_OPS`] ops of tapes, in its own fixed
+//! order; past that its pieces take the deepest cell it has.
 
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex, OnceLock};
 
 use super::tracer::{PRUNE_MIN_OPS, PrunedEvals, TileState, Tracer};
 use crate::interval::Interval;
@@ -29,46 +33,53 @@ use crate::interval::boxes::{IBox, box_within};
 pub(crate) const MAX_LEVEL: u32 = 5;
 /// Functions shorter than this are not pruned further down the tree.
 const CELL_MIN_OPS: usize = 2 * PRUNE_MIN_OPS;
+/// The most ops of pruned tapes one tile's cells hold (about 40 bytes an
+/// op with its function).
+const CELL_TILE_OPS: usize = 1 << 20;
 
 /// A cell: its level and its index along each axis.
 type CellKey = (u32, [u32; 3]);
 
-/// A cell's evaluators (`None`: the whole functions'), built once by the
-/// first tile that asks.
-type Slot = Arc<OnceLock<Option<PrunedEvals>>>;
-
-/// The cells of one render, built as segments ask for them.
-#[derive(Default)]
+/// One tile's cells, built as its segments ask for them.
+#[derive(Clone, Default)]
 pub(crate) struct CellTapes {
-    cells: Mutex<HashMap<CellKey, Slot>>,
+    // Each cell's evaluators (`None`: the whole functions').
+    cells: HashMap<CellKey, Option<PrunedEvals>>,
+    // Ops of the tapes the cells hold.
+    ops: usize,
+}
+
+impl std::fmt::Debug for CellTapes {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "CellTapes({} cells, {} ops)", self.cells.len(), self.ops)
+    }
 }
 
 impl CellTapes {
     /// The evaluators of the smallest cell whose region holds `b`, built
-    /// now if no tile has asked yet; `None` when no cell's region holds it
-    /// (it leaves the bounds) or nothing prunes there.
-    pub(crate) fn holding(
-        &self,
-        tr: &Tracer<'_>,
-        b: &IBox,
-        st: &mut TileState,
-    ) -> Option<PrunedEvals> {
+    /// now if the tile has not asked yet; `None` when no cell's region
+    /// holds it (it leaves the bounds) or nothing prunes there.
+    pub(crate) fn holding(tr: &Tracer<'_>, b: &IBox, st: &mut TileState) -> Option<PrunedEvals> {
         let key = smallest_cell(tr, b)?;
-        self.evals(tr, key, st)
+        let mut cells = std::mem::take(&mut st.cells);
+        let evals = cells.evals(tr, key, st);
+        st.cells = cells;
+        evals
     }
 
     // Cell `key`'s evaluators, building it (and its ancestors) if needed.
-    fn evals(&self, tr: &Tracer<'_>, key: CellKey, st: &mut TileState) -> Option<PrunedEvals> {
-        let slot = {
-            let mut map = self.cells.lock().unwrap_or_else(|e| e.into_inner());
-            Arc::clone(map.entry(key).or_default())
-        };
-        slot.get_or_init(|| self.build(tr, key, st)).clone()
+    fn evals(&mut self, tr: &Tracer<'_>, key: CellKey, st: &mut TileState) -> Option<PrunedEvals> {
+        if let Some(e) = self.cells.get(&key) {
+            return e.clone();
+        }
+        let e = self.build(tr, key, st);
+        self.cells.insert(key, e.clone());
+        e
     }
 
     // Prunes cell `key`'s functions from its parent's.
     fn build(
-        &self,
+        &mut self,
         tr: &Tracer<'_>,
         (level, at): CellKey,
         st: &mut TileState,
@@ -78,6 +89,9 @@ impl CellTapes {
         } else {
             self.evals(tr, (level - 1, at.map(|i| i / 2)), st)
         };
+        if self.ops >= CELL_TILE_OPS {
+            return parent;
+        }
         let local;
         let from = match &parent {
             Some((evals, live_ops)) => {
@@ -89,7 +103,13 @@ impl CellTapes {
             }
             None => tr,
         };
-        from.pruned_to(cell_region(tr, (level, at)), st).or(parent)
+        match from.pruned_to(cell_region(tr, (level, at)), st) {
+            Some(own) => {
+                self.ops += own.1.iter().sum::<usize>();
+                Some(own)
+            }
+            None => parent,
+        }
     }
 }
 

@@ -422,7 +422,6 @@ mod tests {
             prune: false,
             flat: false,
             groups: Default::default(),
-            cells: Default::default(),
             slice_ends: std::sync::Arc::new([]),
             large: false,
         };

@@ -32,6 +32,7 @@
 use glam::DVec3;
 
 use super::camera::{bounds_box, normalize};
+use super::cells::CellTapes;
 use super::probe;
 use super::shade::Surf;
 use super::tracer::{TileState, Tracer};
@@ -221,7 +222,7 @@ impl Segments<'_> {
             // A piece narrower than the current cell's by the ratio is
             // swept, with its sub-pieces, on its own cell's evaluators.
             if tr.prune && tr.large && (c - a) * SEGMENT_CELL_RATIO <= scope {
-                if let Some((evals, live_ops)) = tr.cells.holding(tr, &clip, st) {
+                if let Some((evals, live_ops)) = CellTapes::holding(tr, &clip, st) {
                     let local = tr.with_evals(&evals, live_ops);
                     if !self.free(&local, vec![(a, c)], c - a, sw, st) {
                         return false;

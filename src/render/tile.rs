@@ -153,7 +153,12 @@ pub(crate) fn render_tile(
         class: opts
             .want_classify
             .then(|| tile.class.iter().map(|&c| class_color(c)).collect()),
-        state: st,
+        // The tile's cells go with the tile: a finished tile waits for
+        // its row, and the tapes of its cells are most of its memory.
+        state: TileState {
+            cells: Default::default(),
+            ..st
+        },
     }
 }
 

@@ -78,9 +78,6 @@ pub(crate) struct Tracer<'a> {
     /// Evaluators pruned to groups of tiles, which tiles prune theirs
     /// from (shared by the tracers of one camera).
     pub groups: Arc<TileGroups>,
-    /// Evaluators pruned to the cells of an octree over the bounds, for
-    /// shadow segments (shared by every tracer of one render).
-    pub cells: Arc<CellTapes>,
     /// The interior ends, in increasing order, of the slices of the tile
     /// these evaluators are pruned to (empty outside such a tile).
     pub slice_ends: Arc<[f64]>,
@@ -129,6 +126,8 @@ pub(crate) struct TileState {
     pub mean_value: MeanValuePolicy,
     /// Scratch space for pruning tapes.
     pub workspace: Workspace,
+    /// The tile's octree cells, for shadow segments (see `render::cells`).
+    pub cells: CellTapes,
 }
 
 impl<'a> Tracer<'a> {
@@ -171,7 +170,6 @@ impl<'a> Tracer<'a> {
             prune,
             flat: constant_along_rays(&cam, scene),
             groups: Arc::default(),
-            cells: Arc::default(),
             slice_ends: Arc::new([]),
             large,
         }
@@ -186,7 +184,6 @@ impl<'a> Tracer<'a> {
             live_ops: self.live_ops.clone(),
             tapes: self.tapes.clone(),
             groups: Arc::default(),
-            cells: Arc::clone(&self.cells),
             slice_ends: Arc::new([]),
             ..*self
         }
@@ -208,7 +205,6 @@ impl<'a> Tracer<'a> {
             live_ops,
             tapes: self.tapes.clone(),
             groups: Arc::clone(&self.groups),
-            cells: Arc::clone(&self.cells),
             slice_ends: Arc::clone(&self.slice_ends),
             ..*self
         }
@@ -573,7 +569,6 @@ impl Tracer<'static> {
             prune: true,
             flat: false,
             groups: Default::default(),
-            cells: Default::default(),
             slice_ends: Arc::new([]),
             large: false,
         }
