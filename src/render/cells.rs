@@ -103,12 +103,20 @@ impl CellTapes {
             }
             None => tr,
         };
+        // A cell keeps tapes of its own only where they are at most half
+        // its parent's: near the root of a union of many objects the cells
+        // keep nearly all of it, and holding those copies spent most of a
+        // tile's budget.
+        let before: usize = match &parent {
+            Some((_, live_ops)) => live_ops.iter().sum(),
+            None => tr.live_ops.iter().sum(),
+        };
         match from.pruned_to(cell_region(tr, (level, at)), st) {
-            Some(own) => {
+            Some(own) if 2 * own.1.iter().sum::<usize>() <= before => {
                 self.ops += own.1.iter().sum::<usize>();
                 Some(own)
             }
-            None => parent,
+            _ => parent,
         }
     }
 }

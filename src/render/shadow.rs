@@ -32,7 +32,7 @@
 use glam::DVec3;
 
 use super::camera::{bounds_box, normalize};
-use super::cells::CellTapes;
+use super::cells::{self, CellTapes};
 use super::probe;
 use super::shade::Surf;
 use super::tracer::{TileState, Tracer};
@@ -155,9 +155,22 @@ pub(crate) fn segment_free(
     // halves), without evaluating the function over boxes spanning the
     // bounds (on 1000 spheres, the whole function's native code over a
     // dozen such boxes per segment).
-    let levels = (len / (tr.diag / 8.0)).log2().ceil();
+    //
+    // Where pieces run cells' tapes, they start as long as the finest
+    // cells are wide: the coarser cells keep thousands of ops of a union
+    // of many objects (their pieces delegate to the whole function's
+    // native code, about 10 µs each) and seldom reject a piece, while a
+    // finest cell's few hundred ops reject most pieces at once.
+    let piece = if tr.prune && tr.large {
+        (0..3)
+            .map(|i| (tr.bounds.max[i] - tr.bounds.min[i]) / f64::from(1u32 << cells::MAX_LEVEL))
+            .fold(f64::INFINITY, f64::min)
+    } else {
+        tr.diag / 8.0
+    };
+    let levels = (len / piece).log2().ceil();
     let levels = if levels.is_finite() {
-        levels.clamp(0.0, 6.0) as u32
+        levels.clamp(0.0, 10.0) as u32
     } else {
         0
     };
