@@ -12,16 +12,16 @@
 //! increasing along the segment (interval gradient · segment direction > 0)
 //! and every object is proven positive at the piece's start (at q: an
 //! interval test of q; further on: the previous piece was proven positive
-//! up to its end inside the bounds). A piece shorter than ε/2
-//! that is not free, or an exhausted budget, means shadow.
+//! up to its end, by the interval test inside the bounds or by the
+//! monotonicity test anywhere). A piece shorter than ε/2 that is not free,
+//! or an exhausted budget, means shadow.
 //!
-//! As along a camera ray (see `super::ray`), a piece that may hold surface
-//! and is several times narrower than the one the functions were last
-//! pruned to has its sub-pieces swept on functions pruned to its box: a
-//! segment through a union of many objects soon meets only the one or two
-//! near it, where every piece used to run the whole function (and, for a
-//! function too long for native derivatives, its whole tape for the
-//! monotonicity test).
+//! In a scene large enough to prune, a piece runs the evaluators of the
+//! smallest cell of a loose octree over the bounds that holds it (see
+//! `super::cells`), looked up again as pieces halve: a segment through a
+//! union of many objects meets only the few near each piece, where every
+//! piece used to run the whole function (and, for a function too long for
+//! native derivatives, its whole tape for the monotonicity test).
 //!
 //! For an included block, one shadow beam first tests all its hit points
 //! at once: the box Q of their q points replaces the single point, and the
