@@ -30,7 +30,7 @@ use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_within};
 
 /// The finest level of cells.
-pub(crate) const MAX_LEVEL: u32 = 5;
+const MAX_LEVEL: u32 = 5;
 /// Functions shorter than this are not pruned further down the tree.
 const CELL_MIN_OPS: usize = 2 * PRUNE_MIN_OPS;
 /// The most ops of pruned tapes one tile's cells hold (about 40 bytes an
@@ -111,14 +111,22 @@ impl CellTapes {
             Some((_, live_ops)) => live_ops.iter().sum(),
             None => tr.live_ops.iter().sum(),
         };
-        match from.pruned_to(cell_region(tr, (level, at)), st) {
-            Some(own) if 2 * own.1.iter().sum::<usize>() <= before => {
-                self.ops += own.1.iter().sum::<usize>();
+        let own = from.pruned_to(cell_region(tr, (level, at)), st);
+        match own.map(|own| (own.1.iter().sum::<usize>(), own)) {
+            Some((ops, own)) if 2 * ops <= before => {
+                self.ops += ops;
                 Some(own)
             }
             _ => parent,
         }
     }
+}
+
+/// The width of the finest cells (along their narrowest axis).
+pub(crate) fn finest_width(tr: &Tracer<'_>) -> f64 {
+    (0..3)
+        .map(|i| (tr.bounds.max[i] - tr.bounds.min[i]) / f64::from(1u32 << MAX_LEVEL))
+        .fold(f64::INFINITY, f64::min)
 }
 
 // The region of cell `key`: the cell widened by half its size each side.

@@ -162,9 +162,7 @@ pub(crate) fn segment_free(
     // native code, about 10 µs each) and seldom reject a piece, while a
     // finest cell's few hundred ops reject most pieces at once.
     let piece = if tr.prune && tr.large {
-        (0..3)
-            .map(|i| (tr.bounds.max[i] - tr.bounds.min[i]) / f64::from(1u32 << cells::MAX_LEVEL))
-            .fold(f64::INFINITY, f64::min)
+        cells::finest_width(tr)
     } else {
         tr.diag / 8.0
     };

@@ -28,7 +28,7 @@ impl Tracer<'_> {
             depth: u32,
             out: &mut Vec<f64>,
         ) {
-            if tr.halves(b.0, b.1, t, depth) {
+            if tr.halves(b, t, depth, SLICE_ASPECT) {
                 let m = t.mid();
                 collect(tr, b, Interval::new(t.lo, m), depth - 1, out);
                 out.push(m);
@@ -42,12 +42,23 @@ impl Tracer<'_> {
 
     // Whether the tree of regions of the beam through `xs × ys` halves its
     // region over `t` along the rays, with `depth` levels left: while a
-    // slice is deeper than `SLICE_ASPECT` times its width, unless the
-    // scene is flat.
-    fn halves(&self, xs: (f64, f64), ys: (f64, f64), t: Interval, depth: u32) -> bool {
+    // slice is deeper than `aspect` times its width, unless the scene is
+    // flat.
+    fn halves(
+        &self,
+        (xs, ys): ((f64, f64), (f64, f64)),
+        t: Interval,
+        depth: u32,
+        aspect: f64,
+    ) -> bool {
+        !(depth == 0 || self.flat || t.width() <= aspect * self.beam_width(xs, ys, t))
+    }
+
+    // The width of the beam through the pixel centres `xs × ys` at the far
+    // end of `t`.
+    fn beam_width(&self, xs: (f64, f64), ys: (f64, f64), t: Interval) -> f64 {
         let w = |r: (f64, f64)| (r.1 - r.0 + 1.0) * self.cam.spacing(t.hi);
-        let width = w(xs).max(w(ys));
-        !(depth == 0 || self.flat || t.width() <= SLICE_ASPECT * width)
+        w(xs).max(w(ys))
     }
 
     /// The scene's evaluators pruned to the beam of the rays through the
@@ -210,13 +221,10 @@ impl Beam<'_> {
                 }
             }
         };
-        let deeper = match self.group {
-            // A group's tree goes on to slices as deep as it is wide, for
-            // its tiles' slices to prune from.
-            None if self.is_group => t.width() > self.width(tr, t) && depth > 0 && !tr.flat,
-            _ => tr.halves(self.xs, self.ys, t, depth),
-        };
-        if !deeper {
+        // A group's tree goes on to slices as deep as it is wide, for its
+        // tiles' slices to prune from.
+        let aspect = if self.is_group { 1.0 } else { SLICE_ASPECT };
+        if !tr.halves((self.xs, self.ys), t, depth, aspect) {
             return Some(node);
         }
         let below = (Arc::clone(node.answer()), node.answer_len());
@@ -232,17 +240,11 @@ impl Beam<'_> {
     }
 
     // Whether the beam over `t` is deeper than `LONG_ASPECT` times its
-    // width, in a 3D scene.
-    // In a flat scene nothing along the rays matters, and a tile's beam
-    // prunes to the few objects that cross its narrow footprint.
+    // width, in a 3D scene (in a flat scene nothing along the rays
+    // matters, and a tile's beam prunes to the few objects that cross its
+    // narrow footprint).
     fn long(&self, tr: &Tracer<'_>, t: Interval) -> bool {
-        !tr.flat && t.width() > LONG_ASPECT * self.width(tr, t)
-    }
-
-    // The beam's width at the far end of `t`.
-    fn width(&self, tr: &Tracer<'_>, t: Interval) -> f64 {
-        let w = |r: (f64, f64)| (r.1 - r.0 + 1.0) * tr.cam.spacing(t.hi);
-        w(self.xs).max(w(self.ys))
+        !tr.flat && t.width() > LONG_ASPECT * tr.beam_width(self.xs, self.ys, t)
     }
 }
 
