@@ -26,8 +26,8 @@
 //! surface, where the natural extension overestimates most.
 
 use super::camera::{CornerRays, PixelRay, RayGrid};
-use super::probe::{self, Form, Rect, Sweep};
-use super::ray::{scene_point, trace_ray};
+use super::probe::{self, Floor, Form, Rect, Sweep};
+use super::ray::{scene_point, trace_ray, trace_ray_near_first};
 use super::refine::{Bracket, refine_batch, scene_points};
 use super::stats::RenderStats;
 use super::tracer::{TileState, Tracer};
@@ -63,6 +63,8 @@ pub(crate) struct TileRays {
     pub class: Vec<Class>,
     /// Included blocks, for shadow beams.
     pub included: Vec<Rect>,
+    /// What is known along the whole tile's beam before tracing it.
+    pub top: Floor,
 }
 
 impl TileRays {
@@ -111,17 +113,18 @@ impl TileRays {
 pub(crate) fn trace_tile(tr: &Tracer<'_>, tile: &mut TileRays, h: u32, st: &mut TileState) {
     debug_assert_eq!(h, tile.h);
     let live: Vec<u32> = (0..tr.evals.len() as u32).collect();
-    block(tr, tile, tile.whole(), 0.0, &live, st);
+    block(tr, tile, tile.whole(), tile.top, &live, st);
 }
 
 fn block(
     tr: &Tracer<'_>,
     tile: &mut TileRays,
     b: Rect,
-    t_floor: f64,
+    floor: Floor,
     live: &[u32],
     st: &mut TileState,
 ) {
+    let t_floor = floor.at;
     // The block's T range from its pixels' slabs.
     let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
     for (i, j) in b.pixels() {
@@ -158,7 +161,10 @@ fn block(
         // more pixels), so small scenes, where the prefix costs a few
         // short evaluations, keep the clip start and the pixel method's
         // exact mask.
-        let start = if tr.large
+        // IAA's sub-samples start at the floor too (their masks are
+        // compared with no other method's), and sweep the block's first
+        // candidate piece first (see `probe::Floor`).
+        let start = if (tr.large || tr.sub_samples)
             && t_floor > pt0
             && scene_point(tr, live, ray.at(t_floor), &mut st.stats).0 > 0.0
         {
@@ -166,7 +172,12 @@ fn block(
         } else {
             pt0
         };
-        tile.hits[k] = trace_ray(tr, &ray, start, pt1, live, st);
+        let near = if tr.sub_samples && start == t_floor {
+            floor.near
+        } else {
+            start
+        };
+        tile.hits[k] = trace_ray_near_first(tr, &ray, (start, near), pt1, live, st);
         tile.class[k] = Class::Ray;
         return;
     }
@@ -179,7 +190,8 @@ fn block(
         st.stats.blocks_included += 1;
         return;
     }
-    beam_tests(tr, tile, b, (xs, ys, &corners), (t0, t1), live, st);
+    let near = if t0 == t_floor { floor.near } else { t0 };
+    beam_tests(tr, tile, b, (xs, ys, &corners), (t0, near, t1), live, st);
 }
 
 // The beam tests of a block of several pixels over its T range: rejected,
@@ -189,7 +201,7 @@ fn beam_tests(
     tile: &mut TileRays,
     b: Rect,
     (xs, ys, corners): ((f64, f64), (f64, f64), &CornerRays),
-    (t0, t1): (f64, f64),
+    (t0, near, t1): (f64, f64, f64),
     live: &[u32],
     st: &mut TileState,
 ) {
@@ -200,7 +212,7 @@ fn beam_tests(
     let eval_min = |t: Interval, st: &mut TileState| {
         probe::scene_interval(tr, live, corners.hull(t), form, st)
     };
-    let (ta, tb) = match probe::sweep(tr.sweep_mode(t0, t1), t0, t1, min_w, |t| {
+    let (ta, tb) = match probe::sweep(tr.sweep_mode(t0, near, t1), t0, t1, min_w, |t| {
         eval_min(t, st).lo > 0.0
     }) {
         Sweep::Empty => {
@@ -212,7 +224,7 @@ fn beam_tests(
         // would only be split down to single rays.
         Sweep::Flat => {
             st.stats.blocks_undecided += 1;
-            split(tr, tile, b, t0, live, st);
+            split(tr, tile, b, Floor::at(t0), live, st);
             return;
         }
         Sweep::Candidate(ta, tb) => (ta, tb),
@@ -262,7 +274,8 @@ fn beam_tests(
     let reach = ta + PRUNE_WINDOW * (tb - ta).max(min_w(ta));
     let end = tr.slice_end_after(ta).map_or(t1, |e| e.min(t1));
     let window = Interval::new(ta, end.min(reach));
-    split_pruned(tr, tile, b, (xs, ys, window), ta, &sub_live, st);
+    let floor = Floor { at: ta, near: tb };
+    split_pruned(tr, tile, b, (xs, ys, window), floor, &sub_live, st);
 }
 
 /// Whether every live object is proven positive or undefined over each of
@@ -299,7 +312,7 @@ fn split_pruned(
     tile: &mut TileRays,
     b: Rect,
     (xs, ys, window): ((f64, f64), (f64, f64), Interval),
-    t_floor: f64,
+    floor: Floor,
     live: &[u32],
     st: &mut TileState,
 ) {
@@ -309,9 +322,9 @@ fn split_pruned(
     match pruned {
         Some((evals, live_ops)) => {
             let local = tr.with_evals(&evals, live_ops);
-            split(&local, tile, b, t_floor, live, st);
+            split(&local, tile, b, floor, live, st);
         }
-        None => split(tr, tile, b, t_floor, live, st),
+        None => split(tr, tile, b, floor, live, st),
     }
 }
 
@@ -320,12 +333,12 @@ fn split(
     tr: &Tracer<'_>,
     tile: &mut TileRays,
     b: Rect,
-    t_floor: f64,
+    floor: Floor,
     live: &[u32],
     st: &mut TileState,
 ) {
     for q in b.quarters_by_column() {
-        block(tr, tile, q, t_floor, live, st);
+        block(tr, tile, q, floor, live, st);
     }
 }
 

@@ -14,7 +14,7 @@ use super::band::{Band, FloatLayers, band};
 use super::camera::{self, RayCamera};
 use super::stats::RenderStats;
 use super::subsample::{SplitSamples, downsample, trace_split};
-use super::tile::{TileOut, TileSpec, ms_since, render_tile};
+use super::tile::{ShadowHint, TileOut, TileSpec, ms_since, render_tile};
 use super::tracer::Tracer;
 use super::{MAX_SIZE, RenderError, RenderOptions, RenderOutput, TILE, output};
 use crate::eval::Evaluator;
@@ -101,7 +101,10 @@ impl<'a> Frame<'a> {
         let finer = |depth: u32| -> Result<Tracer<'a>, RenderError> {
             let cam = RayCamera::new(&scene.camera, w << depth, h << depth)
                 .map_err(RenderError::Camera)?;
-            Ok(tr.with_camera(cam))
+            Ok(Tracer {
+                sub_samples: true,
+                ..tr.with_camera(cam)
+            })
         };
         let fine = match aa {
             Aa::Iaa { depth, .. } => {
@@ -312,6 +315,7 @@ impl<'a> Frame<'a> {
                         h: th * s,
                         mask: None,
                         floors: None,
+                        shadow_hints: None,
                     };
                     let out = render_tile(tr, opts, spec, bg);
                     if s > 1 { downsample(out, s) } else { out }
@@ -474,12 +478,29 @@ fn anti_alias(
         shadowed: &t.shadowed,
     };
     let c = aa::classify_tile(tr, &mut px, beside, bg, threshold, &mut st);
+    st.stats.aa_tests_cpu_ms += ms_since(t0);
     let area = (t.x0, t.y0, t.w, t.h);
     // Each split pixel is sampled at its own level (see `aa::Sampling`):
     // the pixels of one level are traced together on that level's image.
     let n = c.sampling.len();
     let level: Vec<u32> = c.sampling.iter().map(|s| s.level(depth)).collect();
     let split: Vec<bool> = c.sampling.iter().map(|s| s.is_split()).collect();
+    // Off shadow edges, sub-samples near their pixel's base hit take its
+    // shadow state (see `aa::SHADOW_REUSE_REACH`).
+    let hints: Vec<ShadowHint> = (0..n)
+        .map(|k| {
+            let t = px.depth[k];
+            ShadowHint {
+                t: if c.edge[k] { f64::NAN } else { t },
+                reach: if t.is_finite() {
+                    aa::SHADOW_REUSE_REACH * tr.cam.spacing(t)
+                } else {
+                    0.0
+                },
+                shadowed: px.shadowed[k],
+            }
+        })
+        .collect();
     let mut sub: Option<SplitSamples> = None;
     for l in (1..=depth).rev() {
         let Some(fine_tr) = fine.at(l) else { continue };
@@ -487,7 +508,7 @@ fn anti_alias(
         if !these.iter().any(|&s| s) {
             continue;
         }
-        let floors = (these.as_slice(), c.floors.as_slice());
+        let floors = (these.as_slice(), c.floors.as_slice(), hints.as_slice());
         let (lin, cov, dep) = trace_split(fine_tr, opts, area, floors, 1 << l, bg, &mut st.stats);
         let all =
             sub.get_or_insert_with(|| (vec![[0.0; 3]; n], vec![0.0; n], vec![f64::INFINITY; n]));

@@ -114,6 +114,30 @@ pub(crate) fn scene_interval(
     f
 }
 
+/// What the sweep of a beam leaves the beams inside it: where along their
+/// rays they may start, and where to look first.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub(crate) struct Floor {
+    /// The beam was proven empty before this ray parameter.
+    pub at: f64,
+    /// The end of the beam's first candidate piece (`at` when there is
+    /// none). The first surface of a narrower beam inside it most often
+    /// lies in `[at, near]`: its sweep takes that piece first instead of
+    /// bisecting the whole range down to it, a dozen halvings of a
+    /// silhouette block's range saved at every level of the quadtree.
+    pub near: f64,
+}
+
+impl Floor {
+    /// Nothing proven: start at 0.
+    pub(crate) const NONE: Floor = Floor { at: 0.0, near: 0.0 };
+
+    /// Proven empty before `at`, with no candidate to look at first.
+    pub(crate) fn at(at: f64) -> Floor {
+        Floor { at, near: at }
+    }
+}
+
 /// What the rejection sweep of a beam over its T range found.
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub(crate) enum Sweep {

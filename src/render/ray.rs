@@ -85,6 +85,21 @@ pub(crate) fn trace_ray(
     live: &[u32],
     st: &mut TileState,
 ) -> Option<Hit> {
+    trace_ray_near_first(tr, ray, (t0, t0), t1, live, st)
+}
+
+/// [`trace_ray`], with `[t0, near]` swept first as a piece of its own
+/// (when `t0 < near < t1`): where a beam left its candidate piece, the
+/// first root of its rays most often lies there, and bisecting the whole
+/// range down to that piece's width costs as many evaluations again.
+pub(crate) fn trace_ray_near_first(
+    tr: &Tracer<'_>,
+    ray: &PixelRay,
+    (t0, near): (f64, f64),
+    t1: f64,
+    live: &[u32],
+    st: &mut TileState,
+) -> Option<Hit> {
     st.stats.rays += 1;
     if live.is_empty() {
         return None;
@@ -92,7 +107,7 @@ pub(crate) fn trace_ray(
     if let Some(h) = starts_inside(tr, ray, live, t0, &mut st.stats) {
         return Some(h);
     }
-    let pieces = tr.first_pieces(t0, t1);
+    let pieces = tr.first_pieces_near(t0, near, t1);
     let mut steps = 0usize;
     sweep_ray(tr, ray, pieces, live, (&mut steps, f64::INFINITY), st)
 }
@@ -424,6 +439,7 @@ mod tests {
             groups: Default::default(),
             slice_ends: std::sync::Arc::new([]),
             large: false,
+            sub_samples: false,
         };
         let (o, d) = ([-2.0, 0.0, 0.0], [1.0, 0.0, 0.0]);
         let ray = PixelRay {

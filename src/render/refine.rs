@@ -390,6 +390,7 @@ mod tests {
                 groups: Default::default(),
                 slice_ends: std::sync::Arc::new([]),
                 large: false,
+                sub_samples: false,
             };
             let brackets: Vec<Bracket> = (0..24)
                 .map(|_| {

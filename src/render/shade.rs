@@ -196,7 +196,7 @@ pub(crate) fn mend_singular_normals(
 pub(crate) fn shade(
     tr: &Tracer<'_>,
     s: &Surf,
-    lit_by_beam: &[bool],
+    (lit_by_beam, known): (&[bool], Option<u64>),
     st: &mut TileState,
 ) -> (DVec3, u64) {
     let mut c = s.color * AMBIENT;
@@ -209,10 +209,16 @@ pub(crate) fn shade(
         if ndl <= 0.0 {
             continue;
         }
-        if light.shadows && !lit_by_beam.get(li).copied().unwrap_or(false) {
+        let bit = 1u64.checked_shl(li as u32).unwrap_or(0);
+        if let Some(bits) = known.filter(|_| light.shadows) {
+            if bits & bit != 0 {
+                shadowed |= bit;
+                continue;
+            }
+        } else if light.shadows && !lit_by_beam.get(li).copied().unwrap_or(false) {
             st.stats.shadow_rays += 1;
             if !segment_free(tr, point_box(s.q.to_array()), &[s.q], end, s.min_w, st) {
-                shadowed |= 1u64.checked_shl(li as u32).unwrap_or(0);
+                shadowed |= bit;
                 continue;
             }
         }
@@ -306,6 +312,7 @@ mod tests {
             groups: Default::default(),
             slice_ends: std::sync::Arc::new([]),
             large: false,
+            sub_samples: false,
         };
         let color = [0.8, 0.3, 0.2];
         let mut seed = 0x1234_5678_9abc_def0u64;
@@ -351,7 +358,7 @@ mod tests {
                     grad_len: 1.0,
                 };
                 let mut st = TileState::default();
-                let (c, _) = shade(&tr, &surf, &[true, true], &mut st);
+                let (c, _) = shade(&tr, &surf, (&[true, true], None), &mut st);
                 for ch in 0..3 {
                     assert!(
                         ci[ch].lo - 1e-12 <= c[ch] && c[ch] <= ci[ch].hi + 1e-12,

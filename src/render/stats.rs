@@ -171,6 +171,8 @@ counters! {
         shadow_cpu_ms: f64 => sum,
         /// Anti-aliasing tests and extra samples, summed over threads, ms.
         aa_cpu_ms: f64 => sum,
+        /// Of `aa_cpu_ms`, IAA's pixel-area tests (the rest is sub-samples), ms.
+        aa_tests_cpu_ms: f64 => sum,
         /// Building the output images after tracing, wall ms.
         output_ms: f64 => once,
     }
@@ -245,7 +247,7 @@ mod tests {
         };
         let json = st.to_json();
         let obj = json.as_object().unwrap();
-        assert_eq!(obj.len(), 31);
+        assert_eq!(obj.len(), 32);
         assert!(obj.get("aa_samples").is_none());
         assert_eq!(json["aa_samples_mean"], 2.5);
         assert_eq!(json["rays"], 3);

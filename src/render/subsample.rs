@@ -5,8 +5,9 @@
 use rayon::prelude::*;
 
 use super::RenderOptions;
+use super::probe::Floor;
 use super::stats::RenderStats;
-use super::tile::{TileOut, TileSpec, render_tile};
+use super::tile::{ShadowHint, TileOut, TileSpec, render_tile};
 use super::tracer::Tracer;
 
 // Averages each s×s block of a tile traced at s× resolution, in linear
@@ -80,7 +81,7 @@ pub(super) fn trace_split(
     fine: &Tracer<'_>,
     opts: &RenderOptions,
     (x0, y0, w, h): (u32, u32, u32, u32),
-    (split, floors): (&[bool], &[f64]),
+    (split, floors, hints): (&[bool], &[Floor], &[ShadowHint]),
     f: u32,
     bg: [f64; 3],
     stats: &mut RenderStats,
@@ -119,7 +120,8 @@ pub(super) fn trace_split(
             let mask: Vec<bool> = (0..nf).map(|k| split[pixel(k)]).collect();
             // Each sub-sample starts where its pixel's area was proven
             // empty up to: the fine render need not sweep that prefix again.
-            let starts: Vec<f64> = (0..nf).map(|k| floors[pixel(k)]).collect();
+            let starts: Vec<Floor> = (0..nf).map(|k| floors[pixel(k)]).collect();
+            let fine_hints: Vec<ShadowHint> = (0..nf).map(|k| hints[pixel(k)]).collect();
             let spec = TileSpec {
                 x0: (x0 + g.0) * f,
                 y0: (y0 + g.1) * f,
@@ -127,6 +129,7 @@ pub(super) fn trace_split(
                 h: fh,
                 mask: Some(&mask),
                 floors: Some(&starts),
+                shadow_hints: Some(&fine_hints),
             };
             (g, downsample(render_tile(fine, &fine_opts, spec, bg), f))
         })

@@ -7,6 +7,7 @@ use image::Rgb;
 
 use super::beam::{self, TileRays};
 use super::camera::RayGrid;
+use super::probe::Floor;
 use super::shade::{self, TileSurfs};
 use super::shadow;
 use super::tracer::{PrunedEvals, TileState, Tracer};
@@ -27,8 +28,24 @@ pub(crate) struct TileSpec<'m> {
     /// Row-major: the pixels to trace (None: all of them).
     pub mask: Option<&'m [bool]>,
     /// Row-major: a ray parameter before which each pixel's ray is known
-    /// to meet no surface (None: its clip start).
-    pub floors: Option<&'m [f64]>,
+    /// to meet no surface, and where its first surface most likely lies
+    /// (None: its clip start).
+    pub floors: Option<&'m [Floor]>,
+    /// Row-major: shadow states a sample may take instead of tracing
+    /// its shadow segments (None: every sample traces its own).
+    pub shadow_hints: Option<&'m [ShadowHint]>,
+}
+
+/// The shadow state of a nearby sample that a sample may reuse: IAA's
+/// sub-samples take their pixel's base sample's (see `aa::Sampling`).
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct ShadowHint {
+    /// Ray parameter of the nearby sample's hit (NaN: none to reuse).
+    pub t: f64,
+    /// How far from `t` a hit may lie and still reuse it.
+    pub reach: f64,
+    /// Lights shadowed at the nearby sample (bit per light).
+    pub shadowed: u64,
 }
 
 /// What tracing a tile produces, row-major within the tile.
@@ -130,7 +147,27 @@ pub(crate) fn render_tile(
     st.stats.shade_cpu_ms += ms_since(t_shade);
 
     let lit_by_beam = shadow_beams(tr, &tile, &surfs, &mut st);
-    let lit = shade_pixels(tr, &surfs, &lit_by_beam, background, opts, &mut st);
+    // A hit within a hint's reach takes the hint's shadow state.
+    let known: Vec<Option<u64>> = match spec.shadow_hints {
+        Some(hints) => tile
+            .hits
+            .iter()
+            .zip(hints)
+            .map(|(h, s)| {
+                h.filter(|h| (h.t - s.t).abs() <= s.reach)
+                    .map(|_| s.shadowed)
+            })
+            .collect(),
+        None => Vec::new(),
+    };
+    let lit = shade_pixels(
+        tr,
+        &surfs,
+        (&lit_by_beam, &known),
+        background,
+        opts,
+        &mut st,
+    );
     TileOut {
         x0: spec.x0,
         y0: spec.y0,
@@ -246,12 +283,28 @@ fn tile_rays(tr: &Tracer<'_>, opts: &RenderOptions, spec: &TileSpec<'_>) -> Tile
         .map(|(k, r)| {
             let on = spec.mask.is_none_or(|m| m[k]);
             let slab = if on { r.slab(&tr.bounds) } else { None };
-            let floor = spec.floors.map_or(0.0, |f| f[k]);
+            let floor = spec.floors.map_or(0.0, |f| f[k].at);
             // A floor at or past the clip end leaves nothing to trace.
             slab.and_then(|(t0, t1)| (floor < t1).then_some((t0.max(floor), t1)))
         })
         .collect();
+    // The tile's beam starts where the nearest floor is, and looks first
+    // as deep as the deepest candidate.
+    let top = spec.floors.map_or(Floor::NONE, |f| {
+        let on = |k: &usize| spec.mask.is_none_or(|m| m[*k]);
+        let at = (0..n)
+            .filter(on)
+            .map(|k| f[k].at)
+            .fold(f64::INFINITY, f64::min);
+        let near = (0..n).filter(on).map(|k| f[k].near).fold(at, f64::max);
+        if at.is_finite() {
+            Floor { at, near }
+        } else {
+            Floor::NONE
+        }
+    });
     TileRays {
+        top,
         starts: Vec::new(),
         x0: spec.x0,
         y0: spec.y0,
@@ -386,7 +439,7 @@ struct Lit {
 fn shade_pixels(
     tr: &Tracer<'_>,
     surfs: &TileSurfs,
-    lit_by_beam: &[bool],
+    (lit_by_beam, known): (&[bool], &[Option<u64>]),
     background: [f64; 3],
     opts: &RenderOptions,
     ts: &mut TileState,
@@ -403,7 +456,15 @@ fn shade_pixels(
     for k in 0..n {
         if let Some(s) = surfs.get(k) {
             let t0 = any_shadows.then(Instant::now);
-            let (c, sh) = shade::shade(tr, s, &lit_by_beam[k * nl..(k + 1) * nl], ts);
+            let (c, sh) = shade::shade(
+                tr,
+                s,
+                (
+                    &lit_by_beam[k * nl..(k + 1) * nl],
+                    known.get(k).copied().flatten(),
+                ),
+                ts,
+            );
             shadow_ms += t0.map_or(0.0, ms_since);
             linear[k] = c.to_array();
             shadowed[k] = sh;

@@ -86,6 +86,11 @@ pub(crate) struct Tracer<'a> {
     /// in a beam then start at the beam's proven-empty prefix (see
     /// `beam::block`).
     pub large: bool,
+    /// This tracer draws IAA's sub-samples (`frame::Fine`): its single
+    /// rays in a beam start at the beam's proven-empty prefix, whatever
+    /// the scene's size, and sweep the prefix's first candidate piece
+    /// first (see `beam::block`).
+    pub sub_samples: bool,
 }
 
 /// Whether the mean-value form still pays in one tile, per block size.
@@ -172,6 +177,7 @@ impl<'a> Tracer<'a> {
             groups: Arc::default(),
             slice_ends: Arc::new([]),
             large,
+            sub_samples: false,
         }
     }
 
@@ -246,10 +252,39 @@ impl<'a> Tracer<'a> {
         (n.min(f64::from(1u32 << SLICE_DEPTH)) as usize).next_power_of_two()
     }
 
-    /// Whether the scene is flat, and [`Tracer::first_pieces`], for
+    /// [`Tracer::first_pieces`], with `[t0, near]` a piece of its own,
+    /// taken first, when `t0 < near < t1` (see `probe::Floor`).
+    pub(crate) fn first_pieces_near(&self, t0: f64, near: f64, t1: f64) -> Vec<(f64, f64)> {
+        if t0 < near && near < t1 {
+            // Behind the first piece, pieces twice as deep as the one before
+            // (cut again at the slices' ends).
+            let mut ends = vec![t0];
+            let mut w = near - t0;
+            let mut e = near;
+            while e < t1 {
+                ends.push(e);
+                w *= 2.0;
+                e += w;
+            }
+            ends.extend(
+                self.slice_ends
+                    .iter()
+                    .copied()
+                    .filter(|&c| c > t0 && c < t1),
+            );
+            ends.sort_by(f64::total_cmp);
+            ends.dedup();
+            ends.push(t1);
+            ends.windows(2).rev().map(|w| (w[0], w[1])).collect()
+        } else {
+            self.first_pieces(t0, t1)
+        }
+    }
+
+    /// Whether the scene is flat, and [`Tracer::first_pieces_near`], for
     /// `probe::sweep`.
-    pub(crate) fn sweep_mode(&self, t0: f64, t1: f64) -> (bool, Vec<(f64, f64)>) {
-        (self.flat, self.first_pieces(t0, t1))
+    pub(crate) fn sweep_mode(&self, t0: f64, near: f64, t1: f64) -> (bool, Vec<(f64, f64)>) {
+        (self.flat, self.first_pieces_near(t0, near, t1))
     }
 
     /// The first end of a slice of this tile after `t`, if any.
@@ -571,6 +606,7 @@ impl Tracer<'static> {
             groups: Default::default(),
             slice_ends: Arc::new([]),
             large: false,
+            sub_samples: false,
         }
     }
 }

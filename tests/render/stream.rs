@@ -17,6 +17,7 @@ fn counters(s: &RenderStats) -> RenderStats {
         shade_cpu_ms: 0.0,
         shadow_cpu_ms: 0.0,
         aa_cpu_ms: 0.0,
+        aa_tests_cpu_ms: 0.0,
         output_ms: 0.0,
         ..s.clone()
     }
