@@ -610,3 +610,55 @@ impl Tracer<'static> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    // The pieces as a list front to back (the stack pops the last first).
+    fn front_to_back(stack: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
+        stack.into_iter().rev().collect()
+    }
+
+    #[test]
+    fn pieces_near_a_candidate_take_it_first_then_double() {
+        let tr = Tracer::for_tests(&crate::scene::Camera::default(), 64);
+        let p = front_to_back(tr.first_pieces_near(1.0, 1.5, 10.0));
+        assert_eq!(p[0], (1.0, 1.5));
+        // Contiguous from t0 to t1, each piece at most twice as deep as
+        // the one before.
+        assert_eq!(p.last().unwrap().1, 10.0);
+        for w in p.windows(2) {
+            assert_eq!(w[0].1, w[1].0);
+            assert!(w[1].1 - w[1].0 <= 2.0 * (w[0].1 - w[0].0) + 1e-12, "{p:?}");
+        }
+        assert_eq!(&p[1..4], &[(1.5, 2.5), (2.5, 4.5), (4.5, 8.5)]);
+        // No candidate inside the range: the plain first pieces.
+        assert_eq!(
+            tr.first_pieces_near(1.0, 1.0, 10.0),
+            tr.first_pieces(1.0, 10.0)
+        );
+        assert_eq!(
+            tr.first_pieces_near(1.0, 12.0, 10.0),
+            tr.first_pieces(1.0, 10.0)
+        );
+    }
+
+    #[test]
+    fn pieces_near_a_candidate_are_cut_at_slice_ends() {
+        let mut tr = Tracer::for_tests(&crate::scene::Camera::default(), 64);
+        tr.slice_ends = Arc::new([2.0, 3.0]);
+        let p = front_to_back(tr.first_pieces_near(1.0, 1.5, 5.0));
+        assert_eq!(
+            p,
+            vec![
+                (1.0, 1.5),
+                (1.5, 2.0),
+                (2.0, 2.5),
+                (2.5, 3.0),
+                (3.0, 4.5),
+                (4.5, 5.0)
+            ]
+        );
+    }
+}
