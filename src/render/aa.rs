@@ -525,7 +525,8 @@ fn mark_beside_full(sampling: &mut [Sampling], w: u32) {
 pub(crate) struct Classified {
     /// How each pixel is sampled.
     pub sampling: Vec<Sampling>,
-    /// Where a split pixel's whole area was proven empty up to.
+    /// What a split pixel's area tests proved along its rays: empty up
+    /// to `at`, the first candidate piece ending at `near`.
     pub floors: Vec<Floor>,
     /// Which pixels sit on a shadow edge.
     pub edge: Vec<bool>,

@@ -37,7 +37,8 @@ pub(crate) struct TileSpec<'m> {
 }
 
 /// The shadow state of a nearby sample that a sample may reuse: IAA's
-/// sub-samples take their pixel's base sample's (see `aa::Sampling`).
+/// sub-samples take their pixel's base sample's (see
+/// `aa::SHADOW_REUSE_REACH`).
 #[derive(Copy, Clone, Debug)]
 pub(crate) struct ShadowHint {
     /// Ray parameter of the nearby sample's hit (NaN: none to reuse).
