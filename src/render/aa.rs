@@ -679,7 +679,7 @@ impl Ctx<'_, '_> {
             Some(probe::scene_interval(tr, &self.all, hb, Form::Tight(0), st))
         };
         let rejected = |t: Interval| eval_min(t, st).is_none_or(|f| f.lo > 0.0);
-        let near = if t0 == floor.at { floor.near } else { t0 };
+        let near = floor.near_from(t0);
         let (ta, tb) = match probe::sweep(tr.sweep_mode(t0, near, t1), t0, t1, min_w, rejected) {
             Sweep::Empty => return decide(Cell::Background, floor),
             // Constant along the rays: no bracket to include.

@@ -172,8 +172,8 @@ fn block(
         } else {
             pt0
         };
-        let near = if tr.sub_samples && start == t_floor {
-            floor.near
+        let near = if tr.sub_samples {
+            floor.near_from(start)
         } else {
             start
         };
@@ -190,7 +190,7 @@ fn block(
         st.stats.blocks_included += 1;
         return;
     }
-    let near = if t0 == t_floor { floor.near } else { t0 };
+    let near = floor.near_from(t0);
     beam_tests(tr, tile, b, (xs, ys, &corners), (t0, near, t1), live, st);
 }
 

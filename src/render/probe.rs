@@ -136,6 +136,14 @@ impl Floor {
     pub(crate) fn at(at: f64) -> Floor {
         Floor { at, near: at }
     }
+
+    /// Where a sweep of an inner beam starting at `t0` ends its first
+    /// piece: the candidate's end when it starts at the floor (a beam
+    /// whose own range starts later has no candidate there), else `t0`
+    /// (no first piece of its own).
+    pub(crate) fn near_from(self, t0: f64) -> f64 {
+        if t0 == self.at { self.near } else { t0 }
+    }
 }
 
 /// What the rejection sweep of a beam over its T range found.
