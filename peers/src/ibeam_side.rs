@@ -107,6 +107,8 @@ pub fn worker_main(spec: &WorkerSpec) -> i32 {
     opts.threads = Some(spec.threads);
     opts.want_depth = !spec.workload.is_2d();
     opts.want_normals = !spec.workload.is_2d();
+    // Only the images are kept, as Fidget's side keeps only its image.
+    opts.want_buffers = false;
 
     for line in std::io::stdin().lock().lines() {
         let Ok(line) = line else { break };

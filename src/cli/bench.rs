@@ -338,6 +338,7 @@ fn time_methods(
             want_depth: false,
             want_normals: false,
             want_classify: false,
+            want_buffers: true,
             progress: false,
             prune: true,
         };

@@ -298,6 +298,8 @@ pub fn run_with(
         want_depth: args.depth.is_some(),
         want_normals: args.normals.is_some(),
         want_classify: args.classify.is_some(),
+        // Bands are streamed (`Frame::stream`): no whole-image buffers.
+        want_buffers: false,
         // The CLI draws its own bar (`progress::Bar`).
         progress: false,
         prune: !args.no_prune,

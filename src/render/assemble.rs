@@ -19,6 +19,8 @@ use super::{RenderOptions, RenderOutput, TILE, output};
 
 /// One row of tiles' share of every output buffer.
 struct Rows<'a> {
+    // Whether the per-pixel buffers below are filled (else all empty).
+    buffers: bool,
     color: &'a mut [u8],
     linear: &'a mut [[f32; 3]],
     coverage: &'a mut [f32],
@@ -45,6 +47,7 @@ impl<'a> Rows<'a> {
             s.as_mut().map(|s| take_front(s, k))
         }
         Rows {
+            buffers: self.buffers,
             color: take_front(&mut self.color, 3 * n),
             linear: take_front(&mut self.linear, n),
             coverage: take_front(&mut self.coverage, n),
@@ -67,19 +70,21 @@ impl<'a> Rows<'a> {
                 let s = j * tw..(j + 1) * tw;
                 let d = j * width + t.x0 as usize..j * width + t.x0 as usize + tw;
                 let (d3, depth) = (3 * d.start..3 * d.end, &t.depth[s.clone()]);
-                for (o, c) in self.linear[d.clone()].iter_mut().zip(&t.linear[s.clone()]) {
-                    *o = c.map(|v| v as f32);
-                }
-                for (o, &c) in self.coverage[d.clone()]
-                    .iter_mut()
-                    .zip(&t.coverage[s.clone()])
-                {
-                    *o = c as f32;
-                }
-                self.samples[d.clone()].copy_from_slice(&t.samples[s.clone()]);
-                self.depth_t[d.clone()].copy_from_slice(depth);
-                for (m, z) in self.hit_mask[d.clone()].iter_mut().zip(depth) {
-                    *m = z.is_finite();
+                if self.buffers {
+                    for (o, c) in self.linear[d.clone()].iter_mut().zip(&t.linear[s.clone()]) {
+                        *o = c.map(|v| v as f32);
+                    }
+                    for (o, &c) in self.coverage[d.clone()]
+                        .iter_mut()
+                        .zip(&t.coverage[s.clone()])
+                    {
+                        *o = c as f32;
+                    }
+                    self.samples[d.clone()].copy_from_slice(&t.samples[s.clone()]);
+                    self.depth_t[d.clone()].copy_from_slice(depth);
+                    for (m, z) in self.hit_mask[d.clone()].iter_mut().zip(depth) {
+                        *m = z.is_finite();
+                    }
                 }
                 let span = Encoded {
                     color: &mut self.color[d3.clone()],
@@ -124,12 +129,13 @@ pub(super) fn assemble(
     for t in outs {
         stats.merge(&t.state.stats);
     }
+    let per_pixel = if opts.want_buffers { npx } else { 0 };
     let mut color = filled(3 * npx, 0u8);
-    let mut linear = filled(npx, [0.0f32; 3]);
-    let mut coverage = filled(npx, 0.0f32);
-    let mut samples = filled(npx, 0u32);
-    let mut hit_mask = filled(npx, false);
-    let mut depth_t = filled(npx, 0.0);
+    let mut linear = filled(per_pixel, [0.0f32; 3]);
+    let mut coverage = filled(per_pixel, 0.0f32);
+    let mut samples = filled(per_pixel, 0u32);
+    let mut hit_mask = filled(per_pixel, false);
+    let mut depth_t = filled(per_pixel, 0.0);
     let mut depth = opts.want_depth.then(|| filled(npx, 0u16));
     let mut normals = opts.want_normals.then(|| filled(3 * npx, 0u8));
     let mut class = opts.want_classify.then(|| filled(3 * npx, 0u8));
@@ -140,6 +146,7 @@ pub(super) fn assemble(
         tiles_of[(t.y0 / TILE) as usize].push(t);
     }
     let mut rest = Rows {
+        buffers: opts.want_buffers,
         color: &mut color,
         linear: &mut linear,
         coverage: &mut coverage,
@@ -159,7 +166,12 @@ pub(super) fn assemble(
         .zip(tiles_of.par_iter())
         .for_each(|(mut rows, tiles)| rows.fill(tiles, w as usize, depth_range));
 
-    stats.pixels_hit = hit_mask.iter().filter(|&&m| m).count() as u64;
+    let hits = |z: &[f64]| z.iter().filter(|z| z.is_finite()).count() as u64;
+    stats.pixels_hit = if opts.want_buffers {
+        hits(&depth_t)
+    } else {
+        outs.iter().map(|t| hits(&t.depth)).sum()
+    };
     let image = |px: Vec<u8>| -> RgbImage {
         ImageBuffer::from_raw(w, h, px).expect("a buffer of 3 bytes per pixel")
     };
@@ -257,5 +269,15 @@ mod tests {
         assert!(hits > 0);
         assert_eq!(out.stats.pixels_hit, hits);
         assert!(out.classify.is_none());
+
+        // Without the per-pixel buffers: the same images and hit count.
+        opts.want_buffers = false;
+        let bare = assemble(&outs, &opts, range);
+        assert_eq!(bare.image, out.image);
+        assert_eq!(bare.depth, out.depth);
+        assert_eq!(bare.normals, out.normals);
+        assert_eq!(bare.stats.pixels_hit, hits);
+        assert!(bare.hit_mask.is_empty() && bare.depth_t.is_empty());
+        assert!(bare.linear.is_empty() && bare.coverage.is_empty() && bare.samples.is_empty());
     }
 }

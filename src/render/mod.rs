@@ -107,6 +107,11 @@ pub struct RenderOptions {
     pub want_normals: bool,
     /// Produce a map of how each pixel was decided.
     pub want_classify: bool,
+    /// Fill [`RenderOutput`]'s per-pixel buffers (`hit_mask`, `depth_t`,
+    /// `linear`, `coverage`, `samples`); without them they are empty. A
+    /// megapixel's buffers are 30 MB that the kernel faults in fresh for
+    /// every render: a caller that keeps only the images saves that time.
+    pub want_buffers: bool,
     /// Print a plain tile counter on stderr (unless a caller's report
     /// replaces it, see [`Frame::with_progress`]).
     pub progress: bool,
@@ -126,6 +131,7 @@ impl RenderOptions {
             want_depth: false,
             want_normals: false,
             want_classify: false,
+            want_buffers: true,
             progress: false,
             prune: true,
         }

@@ -94,6 +94,8 @@ pub(super) fn trace_split(
         want_depth: false,
         want_normals: false,
         want_classify: false,
+        // The pixels' means are taken from the fine render's buffers.
+        want_buffers: true,
         progress: false,
         ..opts.clone()
     };
