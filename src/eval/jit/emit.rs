@@ -273,7 +273,7 @@ impl Emitter<'_, '_> {
         self.b.ins().bor(r, m)
     }
 
-    /// `interval::up` on both lanes: `c + max(|c|·2⁻⁵², 2⁻¹⁰⁷⁴)` with
+    /// `interval::up` on both lanes: `c + max(|c|·2⁻⁵², 2⁻¹⁰²²)` with
     /// `c = max(-MAX, v)` (NaN stays NaN: `maxpd` returns its second
     /// operand).
     pub fn vup(&mut self, v: Value) -> Value {
@@ -281,9 +281,9 @@ impl Emitter<'_, '_> {
         let c = self.vmax(neg_max, v);
         let a = self.vabs(c);
         let step = self.vconst(f64::EPSILON, f64::EPSILON);
-        let tiny = self.vconst(f64::from_bits(1), f64::from_bits(1));
+        let floor_step = self.vconst(f64::MIN_POSITIVE, f64::MIN_POSITIVE);
         let t = self.b.ins().fmul(a, step);
-        let t = self.vmax(t, tiny);
+        let t = self.vmax(t, floor_step);
         self.b.ins().fadd(c, t)
     }
 
