@@ -6,7 +6,7 @@
 //! (see `ir::Op`) gives a real (finite or not NaN) value. Rounding
 //! error is covered: the hardware computes in round-to-nearest, and each
 //! bound is then moved outward by one or two ulps ([`up`], [`down`]; by at
-//! most 2⁻¹⁰²¹ within 2⁻⁹⁷⁰ of zero, which keeps subnormals out), which
+//! most 2⁻⁵¹⁰ within 2⁻⁴⁵⁹ of zero, which keeps subnormals out), which
 //! covers the half-ulp error of a correctly rounded `+ - * / sqrt`.
 //! Transcendentals call `libm`, whose stated error is below 1 ulp; we widen
 //! their results by [`TRANSCENDENTAL_ULPS`] ulps. The JIT (`eval::jit`)
@@ -89,30 +89,37 @@ impl Interval {
 
 /// `2^-52`: `|v| * STEP` is at least one ulp of any normal `v`.
 const STEP: f64 = f64::EPSILON;
-/// `2^-1022`, the smallest normal: at least one ulp of every `v` below
-/// `2^-970` in magnitude, where `|v|·2⁻⁵²` falls under it.
+/// `2^-511`: at least one ulp of every `v` below `2^-459` in magnitude,
+/// where `|v|·2⁻⁵²` falls under it; the smallest power of two whose
+/// square is a normal number.
 ///
-/// Why not the smallest subnormal (one ulp of zero, so a tighter bound
+/// Why not the smallest subnormal (one ulp of zero, so the tightest step
 /// there): every bound that is exactly 0 (a square's or an absolute
-/// value's low end, `max(0, ·)`, a constant 0) then became a subnormal,
-/// and Intel cores take a microcode assist on each operation that reads
-/// or writes one. `ibeam render colonnade.vm` at 1024², one thread, on a
-/// 16-core Xeon: 2.6–2.7 s with subnormals, 1.8–2.0 s without, the same
-/// PNG; no change on this project's AMD machine.
-const FLOOR_STEP: f64 = f64::MIN_POSITIVE;
+/// value's low end, `max(0, ·)`, a sum of equal and opposite terms, a
+/// constant derivative) then became a subnormal, and so did its products;
+/// Intel cores take a microcode assist on each operation that reads or
+/// writes one. Stepping by the smallest normal instead kept the products
+/// of such widened zeros subnormal (2⁻¹⁰²² · 0.5); from 2⁻⁵¹¹, a product
+/// of two of them is still normal. Renders on a 16-core Xeon, one thread
+/// (`bench` commands in the README), the same PNGs: colonnade 1024² 2.5 s
+/// (subnormal step) → 1.9 s (2⁻¹⁰²²) → 1.1 s (2⁻⁶⁰⁰); 100 spheres 1.07 →
+/// 0.9 → 0.5–0.6 s. No change on this project's AMD machine. Near zero,
+/// bounds then move out by about 1.5e-154 instead of 4.9e-324: far below
+/// anything a render or a root decision reads.
+pub(crate) const FLOOR_STEP: f64 = f64::from_bits(0x2000_0000_0000_0000);
 
 /// An upper bound strictly above `v` (for finite `v`):
-/// `c + max(|c|·2⁻⁵², 2⁻¹⁰²²)` in round-to-nearest, where
+/// `c + max(|c|·2⁻⁵², 2⁻⁵¹¹)` in round-to-nearest, where
 /// `c = max(-MAX, v)`.
 ///
 /// Why it is sound: `|c|·2⁻⁵²` is at least one ulp of a normal `c` (exact,
 /// or rounded to a multiple of 2⁻¹⁰⁷⁴ no smaller than that ulp, itself such
-/// a multiple), and `2⁻¹⁰²²` is at least one ulp of any `c` below `2⁻⁹⁷⁰`
+/// a multiple), and `2⁻⁵¹¹` is at least one ulp of any `c` below `2⁻⁴⁵⁹`
 /// in magnitude (subnormals included), so the exact sum is at least the
 /// next float above `c`, which is representable; rounding to nearest is
 /// monotone, so the result is `>= next_up(v)` and covers the half-ulp
 /// error of the correctly rounded op that produced `v`. It is at most two
-/// ulps above `v` where `|v| >= 2⁻⁹⁷⁰`, and at most `2⁻¹⁰²¹` above it
+/// ulps above `v` where `|v| >= 2⁻⁴⁵⁹`, and at most `2⁻⁵¹⁰` above it
 /// nearer zero. `up(+inf) = +inf` and `up(NaN)` is NaN; `up(-inf)` is just
 /// above `-MAX`, the right bound when a sum or product overflowed to
 /// `-inf`.

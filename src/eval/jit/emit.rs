@@ -273,7 +273,7 @@ impl Emitter<'_, '_> {
         self.b.ins().bor(r, m)
     }
 
-    /// `interval::up` on both lanes: `c + max(|c|·2⁻⁵², 2⁻¹⁰²²)` with
+    /// `interval::up` on both lanes: `c + max(|c|·2⁻⁵², 2⁻⁵¹¹)` with
     /// `c = max(-MAX, v)` (NaN stays NaN: `maxpd` returns its second
     /// operand).
     pub fn vup(&mut self, v: Value) -> Value {
@@ -281,7 +281,7 @@ impl Emitter<'_, '_> {
         let c = self.vmax(neg_max, v);
         let a = self.vabs(c);
         let step = self.vconst(f64::EPSILON, f64::EPSILON);
-        let floor_step = self.vconst(f64::MIN_POSITIVE, f64::MIN_POSITIVE);
+        let floor_step = self.vconst(crate::interval::FLOOR_STEP, crate::interval::FLOOR_STEP);
         let t = self.b.ins().fmul(a, step);
         let t = self.vmax(t, floor_step);
         self.b.ins().fadd(c, t)

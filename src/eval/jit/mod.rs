@@ -530,8 +530,9 @@ mod tests {
             assert!(same(u0, r0), "up({x:e}): {u0:e} vs {r0:e}");
             assert!(same(u1, r1), "up({:e}): {u1:e} vs {r1:e}", -x);
             if x.is_finite() {
-                // Two ulps, or 2^-1021 near zero (see `interval::up`).
-                let most = (x.next_up().next_up()).max((x + 2.0 * f64::MIN_POSITIVE).next_up());
+                // Two ulps, or 2^-510 near zero (see `interval::up`).
+                let near_zero = (x + 2.0 * crate::interval::FLOOR_STEP).next_up();
+                let most = x.next_up().next_up().max(near_zero);
                 assert!(r0 > x && r0 <= most, "up({x:e}) = {r0:e}");
             }
         }
