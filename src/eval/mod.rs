@@ -93,10 +93,13 @@ pub trait Evaluator: Send + Sync {
         std::time::Duration::ZERO
     }
 
-    /// The part of [`Evaluator::compile_time`] its callers waited for
-    /// (compiled on their threads, not in the background).
-    fn compile_wait(&self) -> std::time::Duration {
-        self.compile_time()
+    /// When the compilations its callers waited for (on their threads, not
+    /// in the background) ran, as wall-clock spans: a render subtracts
+    /// the union of the spans inside it from its time. Not their sum: with
+    /// several threads, kinds compile at once on different threads, and
+    /// the other threads go on rendering.
+    fn compile_waits(&self) -> Vec<(std::time::Instant, std::time::Instant)> {
+        Vec::new()
     }
 
     /// `out[i] = f(xs[i], ys[i], zs[i])` for every i.

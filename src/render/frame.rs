@@ -72,7 +72,7 @@ pub struct Frame<'a> {
     depth_range: (f64, f64),
     start: Instant,
     // Compile time (total, waited for) before the render, ms.
-    compiled_before: (f64, f64),
+    compiled_before: f64,
     float: FloatLayers,
     progress: Option<Progress>,
 }
@@ -352,19 +352,45 @@ impl<'a> Frame<'a> {
     // threads or in the background. All of it is reported as compilation;
     // what the render waited for is not counted as rendering.
     fn finish_times(&self, stats: &mut RenderStats) {
-        let (compiled, waited) = compile_ms(self.evaluators);
-        stats.compile_ms += compiled - self.compiled_before.0;
-        stats.time_ms = ms_since(self.start) - (waited - self.compiled_before.1);
+        let end = Instant::now();
+        stats.compile_ms += compile_ms(self.evaluators) - self.compiled_before;
+        let spans = self.evaluators.iter().flat_map(|e| e.compile_waits());
+        let waited = span_union(spans, (self.start, end));
+        stats.time_ms = (end - self.start).saturating_sub(waited).as_secs_f64() * 1e3;
     }
 }
 
-// Time the evaluators have spent compiling native code so far, and the
-// part of it their callers waited for (not compiled in the background), ms.
-fn compile_ms(evals: &[Arc<dyn Evaluator>]) -> (f64, f64) {
+// Time the evaluators have spent compiling native code so far, ms.
+fn compile_ms(evals: &[Arc<dyn Evaluator>]) -> f64 {
     let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
-    let total = evals.iter().map(|e| ms(e.compile_time())).sum();
-    let waited = evals.iter().map(|e| ms(e.compile_wait())).sum();
-    (total, waited)
+    evals.iter().map(|e| ms(e.compile_time())).sum()
+}
+
+/// The length of the union of `spans` clipped to `within`: the wall time
+/// during which at least one of them ran.
+fn span_union(
+    spans: impl IntoIterator<Item = (Instant, Instant)>,
+    (from, to): (Instant, Instant),
+) -> std::time::Duration {
+    let mut clipped: Vec<(Instant, Instant)> = spans
+        .into_iter()
+        .map(|(a, b)| (a.max(from), b.min(to)))
+        .filter(|(a, b)| a < b)
+        .collect();
+    clipped.sort();
+    let mut total = std::time::Duration::ZERO;
+    let mut open: Option<(Instant, Instant)> = None;
+    for (a, b) in clipped {
+        open = match open {
+            Some((oa, ob)) if a <= ob => Some((oa, ob.max(b))),
+            Some((oa, ob)) => {
+                total += ob - oa;
+                Some((a, b))
+            }
+            None => Some((a, b)),
+        };
+    }
+    total + open.map_or(std::time::Duration::ZERO, |(a, b)| b - a)
 }
 
 // Refuses options, scenes and evaluators that cannot be rendered.
@@ -526,4 +552,31 @@ fn anti_alias(
     );
     st.stats.aa_cpu_ms += ms_since(t0);
     t.state = st;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::span_union;
+    use std::time::{Duration, Instant};
+
+    // Compilations on several threads at once count once, and only inside
+    // the render: the time subtracted never exceeds the render's own.
+    #[test]
+    fn waits_count_their_union_inside_the_render() {
+        let t0 = Instant::now();
+        let at = |ms: u64| t0 + Duration::from_millis(ms);
+        let span = |a: u64, b: u64| (at(a), at(b));
+        let render = span(10, 100);
+        let union = |s: &[(Instant, Instant)]| span_union(s.iter().copied(), render);
+        assert_eq!(union(&[]), Duration::ZERO);
+        // Two threads compiling at once, and one span half before the render.
+        let overlapping = [span(20, 60), span(30, 70), span(0, 15)];
+        assert_eq!(union(&overlapping), Duration::from_millis(55));
+        // Disjoint spans add; one past the render's end is cut there.
+        let disjoint = [span(20, 30), span(40, 50), span(95, 200)];
+        assert_eq!(union(&disjoint), Duration::from_millis(25));
+        // Sixteen threads each waiting the whole render: the render itself.
+        let all = vec![span(0, 500); 16];
+        assert_eq!(union(&all), Duration::from_millis(90));
+    }
 }
