@@ -100,11 +100,12 @@ const STEP: f64 = f64::EPSILON;
 /// Intel cores take a microcode assist on each operation that reads or
 /// writes one. Stepping by the smallest normal instead kept the products
 /// of such widened zeros subnormal (2⁻¹⁰²² · 0.5); from 2⁻⁵¹¹, a product
-/// of two of them is still normal. Renders on a 16-core Xeon, one thread
-/// (`bench` commands in the README), the same PNGs: colonnade 1024² 2.5 s
-/// (subnormal step) → 1.9 s (2⁻¹⁰²²) → 1.1 s (2⁻⁶⁰⁰); 100 spheres 1.07 →
-/// 0.9 → 0.5–0.6 s. No change on this project's AMD machine. Near zero,
-/// bounds then move out by about 1.5e-154 instead of 4.9e-324: far below
+/// of two of them is still normal. `ibeam render … --threads 1` at 1024²
+/// on a 16-core Xeon, the same PNGs for all three steps: colonnade
+/// 2.85–2.98 s (subnormal step) → 1.93–2.13 s (2⁻¹⁰²²) → 1.10–1.21 s
+/// (2⁻⁵¹¹); 100 spheres 1.04 → 0.80 → 0.57–0.61 s. No change on this
+/// project's AMD machine. Near zero, bounds then move out by about
+/// 1.5e-154 instead of 4.9e-324: far below
 /// anything a render or a root decision reads.
 pub(crate) const FLOOR_STEP: f64 = f64::from_bits(0x2000_0000_0000_0000);
 
