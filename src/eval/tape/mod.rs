@@ -155,8 +155,6 @@ pub struct Tape {
 #[derive(Clone, Default, Debug)]
 pub struct Workspace {
     points: Vec<f64>,
-    // One column of a point batch, before it is copied to its register.
-    point_column: Vec<f64>,
     intervals: Vec<Interval>,
     point_duals: Vec<(f64, [f64; 3])>,
     dir: Vec<IntervalDual<1>>,

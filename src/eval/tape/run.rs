@@ -41,9 +41,11 @@ impl Tape {
     /// f and its gradient at `p`, the same bits as the reference
     /// interpreter's [`crate::eval::Evaluator::point_grad`].
     pub fn point_grad(&self, p: [f64; 3], ws: &mut Workspace) -> Grad {
+        // Every register is written before it is read: no clearing.
         let m = &mut ws.point_duals;
-        m.clear();
-        m.resize(self.registers, (0.0, [0.0; 3]));
+        if m.len() < self.registers {
+            m.resize(self.registers, (0.0, [0.0; 3]));
+        }
         for instr in &self.code {
             let (o, d) = match instr.form() {
                 Form::Var(o, var) => {
@@ -94,8 +96,9 @@ impl Tape {
         m: &mut Vec<IntervalDual<S>>,
     ) -> IntervalDual<S> {
         let zero = Interval::point(0.0);
-        m.clear();
-        m.resize(self.registers, (zero, [zero; S]));
+        if m.len() < self.registers {
+            m.resize(self.registers, (zero, [zero; S]));
+        }
         for instr in &self.code {
             let (o, d) = match instr.form() {
                 Form::Var(o, var) => (o, (b[var.index()], seed[var.index()])),
@@ -114,41 +117,22 @@ impl Tape {
     pub fn point_batch(&self, [xs, ys, zs]: [&[f64]; 3], out: &mut [f64], ws: &mut Workspace) {
         let n = out.len();
         assert!(xs.len() == n && ys.len() == n && zs.len() == n);
+        // Every register is written before it is read (the tape is in
+        // order), so the columns need no clearing between calls.
         let m = &mut ws.points;
-        m.clear();
-        m.resize(self.registers * n, 0.0);
-        // Each op writes a scratch column, then copies it into its
-        // register: the loops then read and write disjoint slices, which
-        // the compiler vectorises, whereas an output register that reuses
-        // an operand's would alias it.
-        let col = &mut ws.point_column;
-        col.clear();
-        col.resize(n, 0.0);
+        if m.len() < self.registers * n {
+            m.resize(self.registers * n, 0.0);
+        }
+        let m = &mut m[..self.registers * n];
         for instr in &self.code {
             let at = |r: Reg| r as usize * n;
-            let o = match instr.form() {
-                Form::Var(o, v) => {
-                    col.copy_from_slice([xs, ys, zs][v.index()]);
-                    o
-                }
-                Form::Const(o, c) => {
-                    col.fill(c);
-                    o
-                }
-                Form::Unary(o, op, a) => {
-                    point_unary_column(col, op, &m[at(a)..at(a) + n]);
-                    o
-                }
-                Form::Binary(o, op, a, b) => {
-                    point_binary_column(col, op, &m[at(a)..at(a) + n], &m[at(b)..at(b) + n]);
-                    o
-                }
-                Form::Powi(o, a, k) => {
-                    map1(col, &m[at(a)..at(a) + n], |x| point_powi(x, k));
-                    o
-                }
-            };
-            m[at(o)..at(o) + n].copy_from_slice(col);
+            match instr.form() {
+                Form::Var(o, v) => m[at(o)..at(o) + n].copy_from_slice([xs, ys, zs][v.index()]),
+                Form::Const(o, c) => m[at(o)..at(o) + n].fill(c),
+                Form::Unary(o, op, a) => point_unary_column(m, n, [o, a], op),
+                Form::Binary(o, op, a, b) => point_binary_column(m, n, [o, a, b], op),
+                Form::Powi(o, a, k) => apply1(m, n, [o, a], |x| point_powi(x, k)),
+            }
         }
         let r = self.root_reg() * n;
         out.copy_from_slice(&m[r..r + n]);
@@ -164,32 +148,24 @@ impl Tape {
     ) {
         let n = out.len();
         assert_eq!(boxes.len(), n);
+        // As in `point_batch`: no clearing, columns updated in place.
         let m = &mut ws.intervals;
-        m.clear();
-        m.resize(self.registers * n, Interval::point(0.0));
+        if m.len() < self.registers * n {
+            m.resize(self.registers * n, Interval::point(0.0));
+        }
+        let m = &mut m[..self.registers * n];
         for instr in &self.code {
             let col = |r: Reg| r as usize * n;
             match instr.form() {
                 Form::Var(o, v) => {
-                    for (i, b) in boxes.iter().enumerate() {
-                        m[col(o) + i] = b[v.index()];
+                    for (d, b) in m[col(o)..col(o) + n].iter_mut().zip(boxes) {
+                        *d = b[v.index()];
                     }
                 }
                 Form::Const(o, c) => m[col(o)..col(o) + n].fill(Interval::point(c)),
-                Form::Unary(o, op, a) => {
-                    let (o, a) = (col(o), col(a));
-                    interval_unary_column(m, op, n, [o, a]);
-                }
-                Form::Binary(o, op, a, b) => {
-                    let (o, a, b) = (col(o), col(a), col(b));
-                    interval_binary_column(m, op, n, [o, a, b]);
-                }
-                Form::Powi(o, a, k) => {
-                    let (o, a) = (col(o), col(a));
-                    for i in 0..n {
-                        m[o + i] = m[a + i].powi(k);
-                    }
-                }
+                Form::Unary(o, op, a) => interval_unary_column(m, n, [o, a], op),
+                Form::Binary(o, op, a, b) => interval_binary_column(m, n, [o, a, b], op),
+                Form::Powi(o, a, k) => apply1(m, n, [o, a], |x| x.powi(k)),
             }
         }
         let r = self.root_reg() * n;
@@ -317,67 +293,105 @@ fn interval_pass<M: Registers<Interval> + ?Sized>(
     m.get(root)
 }
 
-/// `out[i] = f(a[i])` over equal-length columns, a loop the compiler
-/// vectorises where `f` is plain arithmetic.
+/// Column `o` of `m` (columns `n` long) set to `f` of column `a`, in one
+/// loop the compiler vectorises where `f` is plain arithmetic. The
+/// register allocator often gives an op the register of an operand that
+/// dies there: then the column is updated in place, element by element,
+/// which reads each operand before writing it. (A scratch column copied
+/// into the register after every op cost a `memcpy` call per op, 3% of a
+/// colonnade render.)
 #[inline(always)]
-fn map1(out: &mut [f64], a: &[f64], f: impl Fn(f64) -> f64) {
-    for (o, &x) in out.iter_mut().zip(a) {
-        *o = f(x);
+fn apply1<T: Copy>(m: &mut [T], n: usize, [o, a]: [Reg; 2], f: impl Fn(T) -> T) {
+    let (dst, [x, _]) = split_columns(m, n, o, [a, a]);
+    match x {
+        Some(x) => dst.iter_mut().zip(x).for_each(|(d, &x)| *d = f(x)),
+        None => dst.iter_mut().for_each(|d| *d = f(*d)),
     }
 }
 
-/// `out[i] = f(a[i], b[i])`, as [`map1`].
+/// Column `o` of `m` set to `f` of columns `a` and `b`, as [`apply1`].
 #[inline(always)]
-fn map2(out: &mut [f64], a: &[f64], b: &[f64], f: impl Fn(f64, f64) -> f64) {
-    for ((o, &x), &y) in out.iter_mut().zip(a).zip(b) {
-        *o = f(x, y);
+fn apply2<T: Copy>(m: &mut [T], n: usize, [o, a, b]: [Reg; 3], f: impl Fn(T, T) -> T) {
+    let (dst, [x, y]) = split_columns(m, n, o, [a, b]);
+    match (x, y) {
+        (Some(x), Some(y)) => {
+            for ((d, &x), &y) in dst.iter_mut().zip(x).zip(y) {
+                *d = f(x, y);
+            }
+        }
+        (None, Some(y)) => dst.iter_mut().zip(y).for_each(|(d, &y)| *d = f(*d, y)),
+        (Some(x), None) => dst.iter_mut().zip(x).for_each(|(d, &x)| *d = f(x, *d)),
+        (None, None) => dst.iter_mut().for_each(|d| *d = f(*d, *d)),
     }
+}
+
+/// Register `o`'s column of `m` (columns `n` long), to write, and the
+/// columns of `operands` to read (`None` for an operand that is `o`).
+#[inline(always)]
+fn split_columns<T>(
+    m: &mut [T],
+    n: usize,
+    o: Reg,
+    operands: [Reg; 2],
+) -> (&mut [T], [Option<&[T]>; 2]) {
+    let (before, rest) = m.split_at_mut(o as usize * n);
+    let (dst, after) = rest.split_at_mut(n);
+    let read = |r: Reg| -> Option<&[T]> {
+        let at = r as usize * n;
+        match r.cmp(&o) {
+            std::cmp::Ordering::Less => Some(&before[at..at + n]),
+            std::cmp::Ordering::Equal => None,
+            std::cmp::Ordering::Greater => Some(&after[at - (o as usize + 1) * n..][..n]),
+        }
+    };
+    (dst, operands.map(read))
 }
 
 /// One unary op over a column of points: the common ops as plain loops,
 /// the rest through the reference rule.
-fn point_unary_column(out: &mut [f64], op: UnaryOp, a: &[f64]) {
+fn point_unary_column(m: &mut [f64], n: usize, regs: [Reg; 2], op: UnaryOp) {
     match op {
-        UnaryOp::Neg => map1(out, a, |x| -x),
-        UnaryOp::Square => map1(out, a, |x| x * x),
-        UnaryOp::Sqrt => map1(out, a, f64::sqrt),
-        UnaryOp::Abs => map1(out, a, f64::abs),
-        _ => map1(out, a, |x| point_unary(op, x)),
+        UnaryOp::Neg => apply1(m, n, regs, |x| -x),
+        UnaryOp::Square => apply1(m, n, regs, |x| x * x),
+        UnaryOp::Sqrt => apply1(m, n, regs, f64::sqrt),
+        UnaryOp::Abs => apply1(m, n, regs, f64::abs),
+        _ => apply1(m, n, regs, |x| point_unary(op, x)),
     }
 }
 
 /// One binary op over a column of points: the common ops as plain loops
 /// (min and max are the reference `min_nan` and `max_nan`, branch-free
 /// selects once inlined), the rest through the reference rule.
-fn point_binary_column(out: &mut [f64], op: BinaryOp, a: &[f64], b: &[f64]) {
+fn point_binary_column(m: &mut [f64], n: usize, regs: [Reg; 3], op: BinaryOp) {
     match op {
-        BinaryOp::Add => map2(out, a, b, |x, y| x + y),
-        BinaryOp::Sub => map2(out, a, b, |x, y| x - y),
-        BinaryOp::Mul => map2(out, a, b, |x, y| x * y),
-        BinaryOp::Min => map2(out, a, b, min_nan),
-        BinaryOp::Max => map2(out, a, b, max_nan),
-        _ => map2(out, a, b, |x, y| point_binary(op, x, y)),
+        BinaryOp::Add => apply2(m, n, regs, |x, y| x + y),
+        BinaryOp::Sub => apply2(m, n, regs, |x, y| x - y),
+        BinaryOp::Mul => apply2(m, n, regs, |x, y| x * y),
+        BinaryOp::Min => apply2(m, n, regs, min_nan),
+        BinaryOp::Max => apply2(m, n, regs, max_nan),
+        _ => apply2(m, n, regs, |x, y| point_binary(op, x, y)),
     }
 }
 
-/// One unary op over a column of intervals, one loop per common op.
-fn interval_unary_column(m: &mut [Interval], op: UnaryOp, n: usize, [o, a]: [usize; 2]) {
+/// One unary op over a column of intervals, one loop per common op (in
+/// place where the output register is the operand's, see [`apply1`]).
+fn interval_unary_column(m: &mut [Interval], n: usize, regs: [Reg; 2], op: UnaryOp) {
     match op {
-        UnaryOp::Neg => (0..n).for_each(|i| m[o + i] = m[a + i].neg()),
-        UnaryOp::Square => (0..n).for_each(|i| m[o + i] = m[a + i].square()),
-        UnaryOp::Sqrt => (0..n).for_each(|i| m[o + i] = m[a + i].sqrt()),
-        _ => (0..n).for_each(|i| m[o + i] = interval_unary(op, m[a + i])),
+        UnaryOp::Neg => apply1(m, n, regs, Interval::neg),
+        UnaryOp::Square => apply1(m, n, regs, Interval::square),
+        UnaryOp::Sqrt => apply1(m, n, regs, Interval::sqrt),
+        _ => apply1(m, n, regs, |x| interval_unary(op, x)),
     }
 }
 
 /// One binary op over a column of intervals, one loop per common op.
-fn interval_binary_column(m: &mut [Interval], op: BinaryOp, n: usize, [o, a, b]: [usize; 3]) {
+fn interval_binary_column(m: &mut [Interval], n: usize, regs: [Reg; 3], op: BinaryOp) {
     match op {
-        BinaryOp::Add => (0..n).for_each(|i| m[o + i] = m[a + i].add(m[b + i])),
-        BinaryOp::Sub => (0..n).for_each(|i| m[o + i] = m[a + i].sub(m[b + i])),
-        BinaryOp::Mul => (0..n).for_each(|i| m[o + i] = m[a + i].mul(m[b + i])),
-        BinaryOp::Min => (0..n).for_each(|i| m[o + i] = m[a + i].min(m[b + i])),
-        BinaryOp::Max => (0..n).for_each(|i| m[o + i] = m[a + i].max(m[b + i])),
-        _ => (0..n).for_each(|i| m[o + i] = interval_binary(op, m[a + i], m[b + i])),
+        BinaryOp::Add => apply2(m, n, regs, Interval::add),
+        BinaryOp::Sub => apply2(m, n, regs, Interval::sub),
+        BinaryOp::Mul => apply2(m, n, regs, Interval::mul),
+        BinaryOp::Min => apply2(m, n, regs, Interval::min),
+        BinaryOp::Max => apply2(m, n, regs, Interval::max),
+        _ => apply2(m, n, regs, |x, y| interval_binary(op, x, y)),
     }
 }
