@@ -349,6 +349,7 @@ fn split_columns<T>(
 
 /// One unary op over a column of points: the common ops as plain loops,
 /// the rest through the reference rule.
+#[inline(always)]
 fn point_unary_column(m: &mut [f64], n: usize, regs: [Reg; 2], op: UnaryOp) {
     match op {
         UnaryOp::Neg => apply1(m, n, regs, |x| -x),
@@ -362,6 +363,7 @@ fn point_unary_column(m: &mut [f64], n: usize, regs: [Reg; 2], op: UnaryOp) {
 /// One binary op over a column of points: the common ops as plain loops
 /// (min and max are the reference `min_nan` and `max_nan`, branch-free
 /// selects once inlined), the rest through the reference rule.
+#[inline(always)]
 fn point_binary_column(m: &mut [f64], n: usize, regs: [Reg; 3], op: BinaryOp) {
     match op {
         BinaryOp::Add => apply2(m, n, regs, |x, y| x + y),
@@ -375,6 +377,7 @@ fn point_binary_column(m: &mut [f64], n: usize, regs: [Reg; 3], op: BinaryOp) {
 
 /// One unary op over a column of intervals, one loop per common op (in
 /// place where the output register is the operand's, see [`apply1`]).
+#[inline(always)]
 fn interval_unary_column(m: &mut [Interval], n: usize, regs: [Reg; 2], op: UnaryOp) {
     match op {
         UnaryOp::Neg => apply1(m, n, regs, Interval::neg),
@@ -385,6 +388,7 @@ fn interval_unary_column(m: &mut [Interval], n: usize, regs: [Reg; 2], op: Unary
 }
 
 /// One binary op over a column of intervals, one loop per common op.
+#[inline(always)]
 fn interval_binary_column(m: &mut [Interval], n: usize, regs: [Reg; 3], op: BinaryOp) {
     match op {
         BinaryOp::Add => apply2(m, n, regs, Interval::add),
