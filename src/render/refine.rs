@@ -150,13 +150,22 @@ pub(crate) fn refine(
     );
     st.point_evals += evals;
     let p = ray.at(t);
-    let obj = scene_point(tr, live, p, st).1;
+    let obj = root_object(tr, live, p, st);
     Some(Hit {
         t,
         obj,
         inside: false,
         grad: Some(tr.point_grad(obj, p, st).d),
     })
+}
+
+/// The object a root at `p` is on: the live object smallest there, as
+/// `scene_point` picks it; with one live object, that one, unevaluated.
+fn root_object(tr: &Tracer<'_>, live: &[u32], p: [f64; 3], st: &mut RenderStats) -> usize {
+    match live {
+        [only] => *only as usize,
+        _ => scene_point(tr, live, p, st).1,
+    }
 }
 
 /// One pixel's bracket for [`refine_batch`]: its ray and [a, b].
@@ -226,7 +235,12 @@ pub(crate) fn refine_batch(
         .zip(&roots)
         .map(|((i, _, _), &t)| brackets[*i].ray.at(t))
         .collect();
-    let objects = batch.min_and_object(tr, live, &at_root, st);
+    // Which object each root is on: with one live object, that one (what
+    // `min_and_object` picks), without evaluating it again.
+    let objects = match live {
+        [only] => vec![(f64::NAN, *only as usize); at_root.len()],
+        _ => batch.min_and_object(tr, live, &at_root, st),
+    };
     for ((((i, _, _), &t), &(_, obj)), &p) in
         searches.iter().zip(&roots).zip(&objects).zip(&at_root)
     {
