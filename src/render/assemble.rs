@@ -166,12 +166,11 @@ pub(super) fn assemble(
         .zip(tiles_of.par_iter())
         .for_each(|(mut rows, tiles)| rows.fill(tiles, w as usize, depth_range));
 
-    let hits = |z: &[f64]| z.iter().filter(|z| z.is_finite()).count() as u64;
-    stats.pixels_hit = if opts.want_buffers {
-        hits(&depth_t)
-    } else {
-        outs.iter().map(|t| hits(&t.depth)).sum()
-    };
+    // Every pixel lies in exactly one tile: counted there, with or
+    // without the buffers.
+    stats.pixels_hit = (outs.iter().flat_map(|t| &t.depth))
+        .filter(|z| z.is_finite())
+        .count() as u64;
     let image = |px: Vec<u8>| -> RgbImage {
         ImageBuffer::from_raw(w, h, px).expect("a buffer of 3 bytes per pixel")
     };

@@ -71,7 +71,7 @@ pub struct Frame<'a> {
     bg: [f64; 3],
     depth_range: (f64, f64),
     start: Instant,
-    // Compile time (total, waited for) before the render, ms.
+    // Compile time before the render, ms.
     compiled_before: f64,
     float: FloatLayers,
     progress: Option<Progress>,
