@@ -147,8 +147,8 @@ pub(crate) fn render_tile(
     );
     st.stats.shade_cpu_ms += ms_since(t_shade);
 
-    let lit_by_beam = shadow_beams(tr, &tile, &surfs, &mut st);
-    // A hit within a hint's reach takes the hint's shadow state.
+    // A hit within a hint's reach takes the hint's shadow state, and
+    // needs no shadow beam either.
     let known: Vec<Option<u64>> = match spec.shadow_hints {
         Some(hints) => tile
             .hits
@@ -161,6 +161,7 @@ pub(crate) fn render_tile(
             .collect(),
         None => Vec::new(),
     };
+    let lit_by_beam = shadow_beams(tr, &tile, &surfs, &known, &mut st);
     let lit = shade_pixels(
         tr,
         &surfs,
@@ -384,11 +385,14 @@ fn visibility(tr: &Tracer<'_>, method: Method, tile: &mut TileRays, th: u32, st:
 }
 
 // Shadow beams over the included blocks: row-major per pixel and light,
-// whether one beam proved the pixel lit.
+// whether one beam proved the pixel lit. Pixels whose shadow state is
+// `known` (row-major; empty: none is) stay out of the beams: shading
+// never reads the beams' answer for them.
 fn shadow_beams(
     tr: &Tracer<'_>,
     tile: &TileRays,
     surfs: &TileSurfs,
+    known: &[Option<u64>],
     ts: &mut TileState,
 ) -> Vec<bool> {
     let t_shadow = Instant::now();
@@ -404,6 +408,9 @@ fn shadow_beams(
             for (i, j) in b.pixels() {
                 let k = (j * tile.w + i) as usize;
                 let Some(&s) = surfs.get(k) else { continue };
+                if known.get(k).is_some_and(Option::is_some) {
+                    continue;
+                }
                 let facing =
                     shadow::light_dir(tr, light.kind, s.p).is_some_and(|(l, _)| s.n.dot(l) > 0.0);
                 if facing {
