@@ -462,6 +462,7 @@ impl Interval {
 
 pub mod boxes;
 mod elementary;
+pub mod exp;
 mod steps;
 mod transcendental;
 pub use steps::{rem_euclid, sign};

@@ -65,14 +65,14 @@ impl Interval {
         if self.is_empty() {
             return Interval::EMPTY;
         }
-        let hi = libm::exp(self.hi);
+        let hi = super::exp::exp(self.hi);
         // A point interval (the mean-value form's centre, a ray's fixed
         // parameter) needs one call: exp is a function of its argument's
         // value, so the bits are those of two calls.
         let lo = if self.lo == self.hi {
             hi
         } else {
-            libm::exp(self.lo)
+            super::exp::exp(self.lo)
         };
         Interval::new(widen_down(lo).max(0.0), widen_up(hi))
     }

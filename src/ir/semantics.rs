@@ -78,7 +78,7 @@ pub fn point_unary(op: UnaryOp, a: f64) -> f64 {
         UnaryOp::Abs => a.abs(),
         UnaryOp::Square => a * a,
         UnaryOp::Sqrt => a.sqrt(),
-        UnaryOp::Exp => libm::exp(a),
+        UnaryOp::Exp => crate::interval::exp::exp(a),
         UnaryOp::Ln => libm::log(a),
         UnaryOp::Sin => libm::sin(a),
         UnaryOp::Cos => libm::cos(a),
