@@ -33,7 +33,8 @@
 //! Only `+ − ×` in round-to-nearest are used (no fused multiply-add, no
 //! platform libm), so every platform gives the same bits. The tests check
 //! the bound against correctly rounded values from 60-digit decimal
-//! arithmetic (`tests/data/exp_cases.txt`).
+//! arithmetic (`tests/data/exp_cases.txt`). `tests/data/exp_cases.py`
+//! writes those values, and prints the constants and the table below.
 
 /// |x| up to which the table path applies; libm beyond (overflow,
 /// subnormal results, infinities, NaN).
