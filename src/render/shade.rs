@@ -7,10 +7,10 @@ use glam::DVec3;
 
 use super::camera::normalize;
 use super::refine::illinois;
-use super::shadow::{light_dir, segment_free};
+use super::shadow::{light_dir, point_segment_free};
 use super::tracer::{TileState, Tracer};
 use crate::interval::Interval;
-use crate::interval::boxes::{IBox, dot as dot_box, normalize_box, point_box};
+use crate::interval::boxes::{IBox, dot as dot_box, normalize_box};
 use crate::render::stats::RenderStats;
 use crate::scene::LightKind;
 
@@ -197,6 +197,7 @@ pub(crate) fn shade(
     tr: &Tracer<'_>,
     s: &Surf,
     (lit_by_beam, known): (&[bool], Option<u64>),
+    blockers: &mut [Option<f64>],
     st: &mut TileState,
 ) -> (DVec3, u64) {
     let mut c = s.color * AMBIENT;
@@ -217,7 +218,12 @@ pub(crate) fn shade(
             }
         } else if light.shadows && !lit_by_beam.get(li).copied().unwrap_or(false) {
             st.stats.shadow_rays += 1;
-            if !segment_free(tr, point_box(s.q.to_array()), &[s.q], end, s.min_w, st) {
+            let blocker = blockers.get(li).copied().flatten();
+            let (free, found) = point_segment_free(tr, s.q, end, s.min_w, blocker, st);
+            if let Some(b) = blockers.get_mut(li) {
+                *b = found.or(*b);
+            }
+            if !free {
                 shadowed |= bit;
                 continue;
             }
@@ -358,7 +364,7 @@ mod tests {
                     grad_len: 1.0,
                 };
                 let mut st = TileState::default();
-                let (c, _) = shade(&tr, &surf, (&[true, true], None), &mut st);
+                let (c, _) = shade(&tr, &surf, (&[true, true], None), &mut [], &mut st);
                 for ch in 0..3 {
                     assert!(
                         ci[ch].lo - 1e-12 <= c[ch] && c[ch] <= ci[ch].hi + 1e-12,

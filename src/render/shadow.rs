@@ -125,6 +125,50 @@ pub(crate) fn segment_free(
     min_w: f64,
     st: &mut TileState,
 ) -> bool {
+    sweep_segments(tr, q, starts, end, min_w, st).0
+}
+
+/// [`segment_free`] for the one segment from `start` (a shading point) to
+/// `end`, which first tries the point at `blocker` along it (a fraction of
+/// the segment): where a nearby sample's segment found a point inside a
+/// solid, this one most often meets the same solid there. A point of the
+/// segment inside a solid settles the answer (not free) as the sweep's own
+/// such test does (`Segments::piece`), so the answer is the same, found
+/// with one point evaluation instead of a sweep up to the blocker. Also
+/// returns where along the segment a point inside a solid was found, for
+/// the next sample to try.
+pub(crate) fn point_segment_free(
+    tr: &Tracer<'_>,
+    start: DVec3,
+    end: SegEnd,
+    min_w: f64,
+    blocker: Option<f64>,
+    st: &mut TileState,
+) -> (bool, Option<f64>) {
+    if let Some(s) = blocker {
+        let d = match end {
+            SegEnd::Point(l) => l - start,
+            SegEnd::Offset(o) => o,
+        };
+        let p = (start + s * d).to_array();
+        let bounds = bounds_box(&tr.bounds);
+        let inside_bounds = (0..3).all(|i| bounds[i].contains(p[i]));
+        if inside_bounds && (0..tr.evals.len()).any(|k| tr.point(k, p, &mut st.stats) < 0.0) {
+            return (false, Some(s));
+        }
+    }
+    sweep_segments(tr, point_box(start.to_array()), &[start], end, min_w, st)
+}
+
+// The sweep of `segment_free`, and where it found a point inside a solid.
+fn sweep_segments(
+    tr: &Tracer<'_>,
+    q: IBox,
+    starts: &[DVec3],
+    end: SegEnd,
+    min_w: f64,
+    st: &mut TileState,
+) -> (bool, Option<f64>) {
     let delta: IBox = match end {
         SegEnd::Point(l) => std::array::from_fn(|i| Interval::point(l[i]).sub(q[i])),
         SegEnd::Offset(o) => point_box(o.to_array()),
@@ -147,6 +191,7 @@ pub(crate) fn segment_free(
     let mut sweep = Sweep {
         pieces: 0,
         front_ok: None,
+        blocked_at: None,
     };
     // The sweep starts from the pieces of bisection level k, about an
     // eighth of the bounds' diagonal long, rather than from the whole
@@ -173,7 +218,8 @@ pub(crate) fn segment_free(
         0
     };
     let pieces = probe::equal_pieces(0.0, 1.0, 1 << levels);
-    seg.free(tr, pieces, f64::INFINITY, &mut sweep, st)
+    let free = seg.free(tr, pieces, f64::INFINITY, &mut sweep, st);
+    (free, sweep.blocked_at)
 }
 
 // The segments from the points of `q` along `delta` (`len` long at most),
@@ -196,6 +242,8 @@ struct Sweep {
     // addition, that every object is proven positive at the piece's start
     // on every segment (None at s = 0 until the start points are checked).
     front_ok: Option<bool>,
+    // Where along the segments a point inside a solid was found.
+    blocked_at: Option<f64>,
 }
 
 impl Segments<'_> {
@@ -303,6 +351,7 @@ impl Segments<'_> {
             });
             let in_bounds = (0..3).all(|i| self.bounds[i].contains(p[i]));
             if in_bounds && maybe.iter().any(|&k| tr.point(k, p, st) < 0.0) {
+                sw.blocked_at = Some(m);
                 return Piece::Blocked;
             }
         }
@@ -364,4 +413,103 @@ pub(crate) fn start_state(tr: &Tracer<'_>, q: [f64; 3], st: &mut RenderStats) ->
         }
     }
     all_pos.then_some(true)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::eval::build::{EvalKind, build_evaluators};
+    use crate::ir::random::Rng;
+    use crate::render::camera::RayCamera;
+    use crate::scene::{Bounds, Camera, Light, Object, RenderSettings, Scene};
+
+    // Whatever point a blocker hint names, on the segment or off any
+    // solid, the answer is the sweep's own; and a hint that falls inside
+    // the occluder is where the answer comes from.
+    // f = y + 0.5 (a floor) and a ball of radius 0.3 at (0, 0.3, 0).
+    fn floor_and_ball() -> Scene {
+        use crate::ir::{BinaryOp, Builder, UnaryOp, Var};
+        let floor = {
+            let mut b = Builder::new();
+            let (y, h) = (b.var(Var::Y), b.constant(0.5));
+            let f = b.binary(BinaryOp::Add, y, h);
+            b.finish(f)
+        };
+        let ball = {
+            let mut b = Builder::new();
+            let (x, y, z) = (b.var(Var::X), b.var(Var::Y), b.var(Var::Z));
+            let (c, r) = (b.constant(0.3), b.constant(0.3));
+            let yc = b.binary(BinaryOp::Sub, y, c);
+            let (x2, y2, z2) = (b.powi(x, 2), b.powi(yc, 2), b.powi(z, 2));
+            let s = b.binary(BinaryOp::Add, x2, y2);
+            let s = b.binary(BinaryOp::Add, s, z2);
+            let d = b.unary(UnaryOp::Sqrt, s);
+            let f = b.binary(BinaryOp::Sub, d, r);
+            b.finish(f)
+        };
+        let object = |name: &str, function| Object {
+            name: name.into(),
+            function,
+            color: [0.8; 3],
+        };
+        Scene {
+            objects: vec![object("floor", floor), object("ball", ball)],
+            camera: Camera::default(),
+            lights: vec![Light {
+                kind: LightKind::Point([0.0, 2.0, 0.0]),
+                color: [1.0; 3],
+                shadows: true,
+            }],
+            bounds: Bounds {
+                min: [-1.0; 3],
+                max: [1.0; 3],
+            },
+            render: RenderSettings::default(),
+        }
+    }
+
+    // Whatever point a blocker hint names, on the segment or off any
+    // solid, the answer is the sweep's own; and a hint that falls inside
+    // the occluder is where the answer comes from.
+    #[test]
+    fn blocker_hints_never_change_the_answer() {
+        let scene = floor_and_ball();
+        let evals = build_evaluators(&scene, EvalKind::Interp).expect("evaluators");
+        let cam = RayCamera::new(&scene.camera, 16, 16).expect("camera");
+        let tr = Tracer::new(&scene, &evals, cam, false);
+        let mut st = TileState::default();
+        let light = SegEnd::Point(DVec3::new(0.0, 2.0, 0.0));
+        let mut rng = Rng::new(7);
+        let (mut shadowed, mut settled_by_hint) = (0, 0);
+        for _ in 0..400 {
+            // Points just above the floor, some under the ball.
+            let p = DVec3::new(rng.range(-0.9, 0.9), -0.49, rng.range(-0.9, 0.9));
+            let free = segment_free(&tr, point_box(p.to_array()), &[p], light, 1e-4, &mut st);
+            shadowed += usize::from(!free);
+            for hint in [
+                None,
+                Some(0.0),
+                Some(0.3),
+                Some(0.32),
+                Some(0.5),
+                Some(0.99),
+            ] {
+                let (hinted, found) = point_segment_free(&tr, p, light, 1e-4, hint, &mut st);
+                assert_eq!(hinted, free, "{p:?} with hint {hint:?}");
+                // A point inside a solid is found only on a shadowed segment.
+                assert!(
+                    found.is_none() || !free,
+                    "{p:?}: found {found:?} on a free segment"
+                );
+                if hint.is_some() && found == hint {
+                    settled_by_hint += 1;
+                }
+            }
+        }
+        assert!(
+            shadowed > 20 && shadowed < 380,
+            "shadowed {shadowed} of 400"
+        );
+        assert!(settled_by_hint > 0);
+    }
 }

@@ -461,6 +461,9 @@ fn shade_pixels(
     // Reading the clock twice per pixel costs more than shading a pixel
     // without shadows: only pixels with shadow segments to trace are timed.
     let any_shadows = tr.lights.iter().any(|l| l.shadows);
+    // Per light, where the last shadowed sample's segment met a solid
+    // (see `shadow::point_segment_free`).
+    let mut blockers = vec![None; nl];
     for k in 0..n {
         if let Some(s) = surfs.get(k) {
             let t0 = any_shadows.then(Instant::now);
@@ -471,6 +474,7 @@ fn shade_pixels(
                     &lit_by_beam[k * nl..(k + 1) * nl],
                     known.get(k).copied().flatten(),
                 ),
+                &mut blockers,
                 ts,
             );
             shadow_ms += t0.map_or(0.0, ms_since);
