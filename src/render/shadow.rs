@@ -28,6 +28,14 @@
 //! same test over `Q + s·(L − Q)` proves the whole block lit (counted in
 //! `shadow_rays_saved`); only if it fails does each pixel test its own
 //! segment. Lights with `shadows: false` run no shadow code.
+//!
+//! A point of a segment inside a solid settles it (shadow) wherever it
+//! lies, and the sweep tests one in each piece it cannot reject. A pixel's
+//! own segment first tests the point at the fraction of its segment where
+//! the tile's last shadowed segment for that light met a solid
+//! ([`point_segment_free`]): neighbours in shadow mostly meet the same
+//! occluder there, and one point evaluation replaces the sweep up to it
+//! (CSG scene at 512²: 226 → 177 ms). The answer is the sweep's own.
 
 use glam::DVec3;
 
