@@ -12,7 +12,7 @@
 //! With N = 128, k = round(x·N/ln 2), j = k mod N, e = (k − j)/N and
 //! r = x − k·ln2/N (|r| ≤ ln2/256 < 0.00271):
 //! exp(x) = 2^e · 2^(j/N) · exp(r).
-//! - 2^(j/N) is a double-double `(hi, lo)` from [`EXP2_TABLE`], written
+//! - 2^(j/N) is a double-double `(hi, lo)` from `EXP2_TABLE`, written
 //!   from 80-digit decimal arithmetic: relative error below 2^-105.
 //! - ln2/N = `LN2_N_HI + LN2_N_LO`, `LN2_N_HI` with 36 significant bits,
 //!   so `k·LN2_N_HI` is exact for |k| < 2^17 and `x − k·LN2_N_HI` is exact
