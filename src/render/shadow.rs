@@ -60,6 +60,16 @@ pub(crate) enum SegEnd {
     Offset(DVec3),
 }
 
+impl SegEnd {
+    /// The segment from `start` to this end, as a vector.
+    fn from(self, start: DVec3) -> DVec3 {
+        match self {
+            SegEnd::Point(l) => l - start,
+            SegEnd::Offset(o) => o,
+        }
+    }
+}
+
 /// The unit direction from `p` towards the light, and the segment end.
 pub(crate) fn light_dir(tr: &Tracer<'_>, kind: LightKind, p: DVec3) -> Option<(DVec3, SegEnd)> {
     match kind {
@@ -154,11 +164,7 @@ pub(crate) fn point_segment_free(
     st: &mut TileState,
 ) -> (bool, Option<f64>) {
     if let Some(s) = blocker {
-        let d = match end {
-            SegEnd::Point(l) => l - start,
-            SegEnd::Offset(o) => o,
-        };
-        let p = (start + s * d).to_array();
+        let p = (start + s * end.from(start)).to_array();
         let bounds = bounds_box(&tr.bounds);
         let inside_bounds = (0..3).all(|i| bounds[i].contains(p[i]));
         if inside_bounds && (0..tr.evals.len()).any(|k| tr.point(k, p, &mut st.stats) < 0.0) {
@@ -346,17 +352,12 @@ impl Segments<'_> {
         // interval over a box holding that point contains its (negative)
         // value, so no piece around it could be rejected, and the
         // monotonicity proof would need f > 0 on that segment.
-        if let Some(s0) = self.starts.first() {
+        if let Some(&s0) = self.starts.first() {
             let m = 0.5 * (a + c);
             // Clamped into the piece's box against rounding (max/min, not
             // `clamp`, which panics on NaN bounds).
-            let p: [f64; 3] = std::array::from_fn(|i| {
-                let d0 = match self.end {
-                    SegEnd::Point(l) => l[i] - s0[i],
-                    SegEnd::Offset(o) => o[i],
-                };
-                (s0[i] + m * d0).max(bx[i].lo).min(bx[i].hi)
-            });
+            let on = (s0 + m * self.end.from(s0)).to_array();
+            let p: [f64; 3] = std::array::from_fn(|i| on[i].max(bx[i].lo).min(bx[i].hi));
             let in_bounds = (0..3).all(|i| self.bounds[i].contains(p[i]));
             if in_bounds && maybe.iter().any(|&k| tr.point(k, p, st) < 0.0) {
                 sw.blocked_at = Some(m);
