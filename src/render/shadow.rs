@@ -165,9 +165,8 @@ pub(crate) fn point_segment_free(
 ) -> (bool, Option<f64>) {
     if let Some(s) = blocker {
         let p = (start + s * end.from(start)).to_array();
-        let bounds = bounds_box(&tr.bounds);
-        let inside_bounds = (0..3).all(|i| bounds[i].contains(p[i]));
-        if inside_bounds && (0..tr.evals.len()).any(|k| tr.point(k, p, &mut st.stats) < 0.0) {
+        let all = 0..tr.evals.len();
+        if inside_a_solid(tr, p, &bounds_box(&tr.bounds), all, &mut st.stats) {
             return (false, Some(s));
         }
     }
@@ -358,8 +357,7 @@ impl Segments<'_> {
             // `clamp`, which panics on NaN bounds).
             let on = (s0 + m * self.end.from(s0)).to_array();
             let p: [f64; 3] = std::array::from_fn(|i| on[i].max(bx[i].lo).min(bx[i].hi));
-            let in_bounds = (0..3).all(|i| self.bounds[i].contains(p[i]));
-            if in_bounds && maybe.iter().any(|&k| tr.point(k, p, st) < 0.0) {
+            if inside_a_solid(tr, p, &self.bounds, maybe.iter().copied(), st) {
                 sw.blocked_at = Some(m);
                 return Piece::Blocked;
             }
@@ -394,6 +392,19 @@ impl Segments<'_> {
         }
         Piece::Open
     }
+}
+
+// Whether the point `p` lies inside `bounds` and one of `objects` is
+// negative there: a point of a shadow segment for which this holds puts
+// the segment's start in shadow, wherever along the segment it lies.
+fn inside_a_solid(
+    tr: &Tracer<'_>,
+    p: [f64; 3],
+    bounds: &IBox,
+    mut objects: impl Iterator<Item = usize>,
+    st: &mut RenderStats,
+) -> bool {
+    (0..3).all(|i| bounds[i].contains(p[i])) && objects.any(|k| tr.point(k, p, st) < 0.0)
 }
 
 // What `Segments::piece` proved.
