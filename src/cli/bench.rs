@@ -217,8 +217,27 @@ fn bench_eval(args: &EvalArgs) -> Result<(), CliError> {
                 }
             })
         };
+        // Pruning the whole tape to each box, against one interval over
+        // it (`tape boxes/s`): the issue asks a pruning to cost about
+        // one interval evaluation of its parent.
+        let whole = ibeam::eval::tape::Tape::new(&f);
+        let prunes = rate(min, BATCH, || {
+            ibeam::eval::tape::with_workspace(|ws| {
+                for b in &boxes {
+                    black_box(whole.prune(black_box(*b), ws));
+                }
+            })
+        });
+        // The same prunings, sixteen boxes a pass (`Tape::prune_batch`).
+        let batch_prunes = rate(min, BATCH, || {
+            ibeam::eval::tape::with_workspace(|ws| {
+                for b in boxes.chunks(16) {
+                    black_box(whole.prune_batch(black_box(b), usize::MAX, ws));
+                }
+            })
+        });
         tape_rows.push(format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.2} | {:.2} |",
             file.display(),
             f.len(),
             si(interp_pts),
@@ -229,6 +248,10 @@ fn bench_eval(args: &EvalArgs) -> Result<(), CliError> {
             si(tape_batch_boxes),
             si(dirs(interp.as_ref())),
             si(dirs(&tape)),
+            si(prunes),
+            si(batch_prunes),
+            tape_boxes / prunes,
+            tape_boxes / batch_prunes,
         ));
         println!(
             "| {} | {} | {} | {} | {} | {:.1}x | {} | {} | {} | {:.1}x | {:.2} |",
@@ -247,9 +270,9 @@ fn bench_eval(args: &EvalArgs) -> Result<(), CliError> {
     }
     println!();
     println!(
-        "| scene | ops | interp points/s | tape points/s | tape batch points/s | interp boxes/s | tape boxes/s | tape batch boxes/s | interp directional/s | tape directional/s |"
+        "| scene | ops | interp points/s | tape points/s | tape batch points/s | interp boxes/s | tape boxes/s | tape batch boxes/s | interp directional/s | tape directional/s | tape prunes/s | tape batch prunes/s | prune / tape box | batch prune / tape box |"
     );
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for row in tape_rows {
         println!("{row}");
     }

@@ -28,6 +28,7 @@ use std::sync::{Arc, Mutex, OnceLock};
 use super::TILE;
 use super::tracer::{PrunedEvals, TileState, Tracer};
 use crate::eval::Evaluator;
+use crate::eval::tape::Tape;
 use crate::interval::Interval;
 use crate::interval::boxes::IBox;
 
@@ -37,9 +38,26 @@ pub(crate) const GROUP_TILES: u32 = 4;
 const GROUP_SIDE: u32 = GROUP_TILES * TILE;
 
 /// One group's pruned evaluators (`None`: nothing prunes there), the
-/// region they are exact on, and which of its tiles (row-major,
-/// [`GROUP_TILES`] a row) they prove empty (see [`empty_tiles`]).
-type Group = Option<(PrunedEvals, IBox, Vec<bool>)>;
+/// region they are exact on, which of its tiles (row-major,
+/// [`GROUP_TILES`] a row) they prove empty (see [`empty_tiles`]), and, in
+/// a flat scene, its other tiles' tapes (see [`TileTapes`]).
+type Group = Option<(PrunedEvals, IBox, Vec<bool>, Vec<Option<Arc<TileTapes>>>)>;
+
+/// A tile's tapes pruned from its group's when the group is built, all
+/// the group's tiles in one pass over each of its tapes
+/// (`Tape::prune_batch`), where each tile's own pass cost as much as a
+/// third of a flat scene's render (prospero). Only in flat scenes, whose
+/// tiles' regions are one box each that the group computes as the tile
+/// does (`tile::tile_depths` of a tile with no pixel rays).
+#[derive(Clone, Debug)]
+pub(crate) struct TileTapes {
+    /// The region the tapes are pruned to: the tile's beam region.
+    pub region: IBox,
+    /// Per object: its group tape pruned to `region` (`Some(None)`: no
+    /// `min`/`max` decided there), or `None` where the group holds no
+    /// tape of the object.
+    pub tapes: Vec<Option<Option<Tape>>>,
+}
 
 /// A group's slot, filled once by the first tile that asks.
 type Slot = Arc<OnceLock<Group>>;
@@ -59,10 +77,13 @@ impl TileGroups {
         tr: &Tracer<'_>,
         (x, y): (u32, u32),
         st: &mut TileState,
-    ) -> Option<(PrunedEvals, IBox)> {
+    ) -> Option<(PrunedEvals, IBox, Option<Arc<TileTapes>>)> {
         let slot = self.built(tr, (x / GROUP_SIDE, y / GROUP_SIDE), st);
         let group = slot.get().and_then(Option::as_ref);
-        group.map(|(evals, region, _)| (evals.clone(), *region))
+        group.map(|(evals, region, _, tiles)| {
+            let at = tile_slot(x, y);
+            (evals.clone(), *region, tiles.get(at).cloned().flatten())
+        })
     }
 
     // The slot of group `key`, built now if no tile has asked yet (outside
@@ -98,9 +119,8 @@ impl TileGroups {
             cells_x.clone().all(|cx| {
                 let (x, y) = (cx * TILE, cy * TILE);
                 let slot = self.built(tr, (x / GROUP_SIDE, y / GROUP_SIDE), st);
-                let at = ((y % GROUP_SIDE) / TILE * GROUP_TILES + (x % GROUP_SIDE) / TILE) as usize;
                 let group = slot.get().and_then(Option::as_ref);
-                group.is_some_and(|(_, _, empty)| empty.get(at) == Some(&true))
+                group.is_some_and(|(_, _, empty, _)| empty.get(tile_slot(x, y)) == Some(&true))
             })
         })
     }
@@ -128,7 +148,79 @@ fn build(tr: &Tracer<'_>, (gx, gy): (u32, u32), st: &mut TileState) -> Group {
     let region = tr.beam_region(xs, ys, t)?;
     let evals = tr.pruned_group(xs, ys, t, st)?;
     let empty = empty_tiles(tr, &evals.0, (x0, y0), (x1, y1), st);
-    Some((evals, region, empty))
+    let tiles = if tr.flat {
+        tile_tapes(tr, &evals.0, (x0, y0), (x1, y1), &empty, st)
+    } else {
+        Vec::new()
+    };
+    Some((evals, region, empty, tiles))
+}
+
+// The slot in its group's per-tile vectors of the tile holding pixel
+// `(x, y)`.
+fn tile_slot(x: u32, y: u32) -> usize {
+    ((y % GROUP_SIDE) / TILE * GROUP_TILES + (x % GROUP_SIDE) / TILE) as usize
+}
+
+// Per tile of the group whose pixels span `x0..x1 × y0..y1` (as in
+// `empty_tiles`): the group's tapes `evals` pruned to the tile's beam
+// region, for the tiles that are not proven `empty` and whose rays meet
+// the bounds; the region is the one `Tracer::pruned_to_beam` prunes a
+// flat tile with no pixel rays to, and a tile whose region differs
+// prunes on its own.
+fn tile_tapes(
+    tr: &Tracer<'_>,
+    evals: &[Arc<dyn Evaluator>],
+    (x0, y0): (u32, u32),
+    (x1, y1): (u32, u32),
+    empty: &[bool],
+    st: &mut TileState,
+) -> Vec<Option<Arc<TileTapes>>> {
+    let n = (GROUP_TILES * GROUP_TILES) as usize;
+    let mut regions = Vec::with_capacity(n);
+    let mut at = Vec::with_capacity(n);
+    for ty in 0..GROUP_TILES {
+        for tx in 0..GROUP_TILES {
+            let (tx0, ty0) = (x0 + tx * TILE, y0 + ty * TILE);
+            let slot = (ty * GROUP_TILES + tx) as usize;
+            if tx0 >= x1 || ty0 >= y1 || empty[slot] {
+                continue;
+            }
+            let xs = (f64::from(tx0) + 0.5, f64::from((tx0 + TILE).min(x1)) - 0.5);
+            let ys = (f64::from(ty0) + 0.5, f64::from((ty0 + TILE).min(y1)) - 0.5);
+            let corners = tr.cam.corners(xs, ys);
+            if let Some(region) = corners
+                .slab_range(&tr.bounds)
+                .and_then(|t| tr.corner_region(&corners, t))
+            {
+                regions.push(region);
+                at.push(slot);
+            }
+        }
+    }
+    let mut tiles: Vec<Option<Arc<TileTapes>>> = vec![None; n];
+    if regions.is_empty() {
+        return tiles;
+    }
+    let mut per_object: Vec<Vec<Option<Option<Tape>>>> = Vec::with_capacity(evals.len());
+    for e in evals {
+        per_object.push(match e.as_regional() {
+            Some(r) => r
+                .pruned_tape()
+                .prune_batch(&regions, usize::MAX, &mut st.workspace)
+                .into_iter()
+                .map(|p| Some(p.map(|p| p.tape)))
+                .collect(),
+            None => vec![None; regions.len()],
+        });
+    }
+    for (i, (&slot, &region)) in at.iter().zip(&regions).enumerate() {
+        tiles[slot] = Some(Arc::new(TileTapes {
+            region,
+            tapes: per_object.iter_mut().map(|o| o[i].take()).collect(),
+        }));
+    }
+    tiles
 }
 
 // Per tile of the group whose pixels span `x0..x1 × y0..y1` (row-major,

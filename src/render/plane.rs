@@ -19,14 +19,17 @@
 //!   would prove the same.
 //! - Objects proven positive are dropped for the rectangle's quarters.
 //!   Rectangles above [`SMALL_PIXELS`] pixels hand their quarters tapes
-//!   pruned to their beam (pruning nests, as in [`super::beam`]); smaller
-//!   ones are split down to single pixels on the tapes they have.
+//!   pruned to their beam (pruning nests, as in [`super::beam`]), all the
+//!   quarters of a level in one pass over their parent's tape; smaller
+//!   ones are split on the tapes they have, down to [`DIRECT_PIXELS`]
+//!   pixels, whose pixels are settled one by one.
 //! - Pixels no rectangle rejects (those of proven-negative rectangles, and
 //!   single pixels left open) are settled together: the scene's value at
 //!   every start point in one point batch (below zero: a hit at the start,
 //!   as `ray::starts_inside` decides), then one interval batch over the
 //!   rest's own ray boxes (the test that opens `ray::trace_ray` on a flat
-//!   scene); only pixels both leave open get a single ray. A
+//!   scene, and what a single pixel's rectangle would prove); only pixels
+//!   both leave open get a single ray. A
 //!   proven-negative interval says only that f < 0 where f is defined, so
 //!   even those pixels take their point value: the images stay identical
 //!   to `Method::Pixel`'s (`tests/flat_scenes.rs`).
@@ -51,6 +54,10 @@ use crate::interval::boxes::{IBox, ray_box};
 /// Rectangles of at most this many pixels are finished without pruning
 /// (`small`).
 const SMALL_PIXELS: u32 = 64;
+
+/// Rectangles of at most this many pixels that their interval leaves open
+/// are settled pixel by pixel, with no interval per pixel first.
+const DIRECT_PIXELS: u32 = 4;
 
 // What every rectangle of one tile reads: the terms its beams are summed
 // from, and a table of how many of its pixels' rays meet the bounds.
@@ -172,6 +179,8 @@ fn level(
     // these functions (`small`), and the objects any of them needs.
     let mut finish: Vec<(Rect, bool)> = Vec::new();
     let mut finish_live: Vec<u32> = Vec::new();
+    // The rectangles split further, whose regions are pruned together.
+    let mut split: Vec<(usize, Option<IBox>)> = Vec::new();
     for (r, &rect) in rects.iter().enumerate() {
         if !plane.may_meet_bounds(rect) {
             // Every ray misses the bounds: `visibility` marks them.
@@ -188,19 +197,24 @@ fn level(
             finish_live.extend(live);
         } else {
             st.stats.blocks_undecided += 1;
-            let quarters: Vec<Rect> = rect.quarters_by_column().collect();
             // The whole tile's functions are already pruned to its beam.
-            let pruned = (!tile.is_whole(rect))
+            let region = (!tile.is_whole(rect))
                 .then(|| tr.region_around(boxes[r]))
-                .flatten()
-                .and_then(|region| tr.pruned_to(region, st));
-            match pruned {
-                Some((evals, live_ops)) => {
-                    let local = tr.with_evals(&evals, live_ops);
-                    level(&local, tile, plane, &quarters, live, st);
-                }
-                None => level(tr, tile, plane, &quarters, live, st),
+                .flatten();
+            split.push((r, region));
+        }
+    }
+    let regions: Vec<IBox> = split.iter().filter_map(|&(_, g)| g).collect();
+    let mut pruned = tr.pruned_to_batch(&regions, st).into_iter();
+    for (r, region) in split {
+        let quarters: Vec<Rect> = rects[r].quarters_by_column().collect();
+        let live = &sub_live[r];
+        match region.and_then(|_| pruned.next()).flatten() {
+            Some((evals, live_ops)) => {
+                let local = tr.with_evals(&evals, live_ops);
+                level(&local, tile, plane, &quarters, live, st);
             }
+            None => level(tr, tile, plane, &quarters, live, st),
         }
     }
     if !finish.is_empty() {
@@ -276,6 +290,11 @@ fn small(
                 set_block(tile, q, Class::Background);
             } else if neg[r] || single {
                 add(tile, q, neg[r], &mut open);
+            } else if (q.x1 - q.x0) * (q.y1 - q.y0) <= DIRECT_PIXELS {
+                // Its pixels' own tests (`settle`) cost less than a
+                // level of single-pixel intervals before them, which
+                // those that start inside would repeat as points.
+                add(tile, q, false, &mut open);
             } else {
                 next.extend(q.quarters_by_column());
             }
@@ -340,6 +359,10 @@ fn settle(
     for (&(k, (t0, t1)), clear) in rest.iter().zip(clear) {
         if clear {
             st.stats.pixels_batched += 1;
+            // What a single pixel's rectangle proves (see `small`).
+            if tile.class[k] == Class::Ray {
+                tile.class[k] = Class::Background;
+            }
         } else {
             tile.class[k] = Class::Ray;
             let ray = tile.ray(k);

@@ -7,6 +7,7 @@
 use std::sync::Arc;
 
 use super::camera::CornerRays;
+use super::groups::TileTapes;
 use super::tracer::{
     PRUNE_MIN_OPS, PrunedEvals, SLICE_ASPECT, SLICE_DEPTH, TileState, Tracer, gain,
 };
@@ -14,7 +15,7 @@ use crate::eval::Evaluator;
 use crate::eval::regional::Regional;
 use crate::eval::tape::Tape;
 use crate::interval::Interval;
-use crate::interval::boxes::box_within;
+use crate::interval::boxes::{IBox, box_within};
 
 impl Tracer<'_> {
     /// The interior ends, in increasing order, of the slices that
@@ -84,12 +85,13 @@ impl Tracer<'_> {
         // The tile prunes from its group's tapes when the group's region
         // holds the tile's (a tape is exact only on its own region).
         let pixel = (xs.0 as u32, ys.0 as u32);
-        let group = self.groups.of_pixel(self, pixel, st).filter(|(_, g)| {
+        let group = self.groups.of_pixel(self, pixel, st).filter(|(_, g, _)| {
             self.beam_region(xs, ys, t)
                 .is_some_and(|r| box_within(&r, g))
         });
-        let group = group.as_ref().map(|(evals, _)| evals);
-        self.beam_trees(xs, ys, t, group, false, st)
+        let tiles = group.as_ref().and_then(|(_, _, tiles)| tiles.as_deref());
+        let group = group.as_ref().map(|(evals, _, _)| evals);
+        self.beam_trees(xs, ys, t, (group, tiles), false, st)
     }
 
     /// The trees of [`Tracer::pruned_to_beam`] for a group of tiles, each
@@ -106,17 +108,18 @@ impl Tracer<'_> {
         if !self.prune {
             return None;
         }
-        self.beam_trees(xs, ys, t, None, true, st)
+        self.beam_trees(xs, ys, t, (None, None), true, st)
     }
 
     // Each large function's tree of regions along the beam through `xs ×
-    // ys` over `t`, pruned from `group`'s trees where given.
+    // ys` over `t`, pruned from `group`'s trees where given, its root
+    // taking the tape the group pruned for it where `tiles` has one.
     fn beam_trees(
         &self,
         xs: (f64, f64),
         ys: (f64, f64),
         t: Interval,
-        group: Option<&PrunedEvals>,
+        (group, tiles): (Option<&PrunedEvals>, Option<&TileTapes>),
         group_beam: bool,
         st: &mut TileState,
     ) -> Option<PrunedEvals> {
@@ -135,6 +138,7 @@ impl Tracer<'_> {
                     parent,
                     group: tree,
                     is_group: group_beam,
+                    pre: tiles.and_then(|p| Some((p.region, p.tapes.get(k)?.as_ref()?))),
                 };
                 let tree = beam.node(self, tape, t, above, SLICE_DEPTH, st)?;
                 let n = tree.pruned_tape().len();
@@ -156,6 +160,9 @@ struct Beam<'e> {
     group: Option<&'e Regional>,
     // Whether the beam is a group's.
     is_group: bool,
+    // The tape the group pruned for the region, from the group's tape
+    // (`groups::TileTapes`; `None` inside: nothing decided there).
+    pre: Option<(IBox, &'e Option<Tape>)>,
 }
 
 impl Beam<'_> {
@@ -210,7 +217,12 @@ impl Beam<'_> {
             ),
             _ => {
                 let source = held.map_or(tape, Regional::pruned_tape);
-                let own = source.prune(region, &mut st.workspace).map(|p| p.tape);
+                // The group's pruning of this very region from this very
+                // tape, where it made one: the same tape.
+                let own = match self.pre {
+                    Some((r, pre)) if r == region && std::ptr::eq(source, tape) => pre.clone(),
+                    _ => source.prune(region, &mut st.workspace).map(|p| p.tape),
+                };
                 let own = own.unwrap_or_else(|| source.clone());
                 if own.len() * gain(above.0.as_ref()) <= above.1 {
                     st.stats.pruned_ops_before += above.1 as u64;

@@ -51,6 +51,23 @@ const REGION_PAD: f64 = 1e-9;
 /// Evaluators (some pruned) and the live op count of each one's function.
 pub(crate) type PrunedEvals = (Vec<Arc<dyn Evaluator>>, Vec<usize>);
 
+/// One object's pruned evaluator and its op count.
+type PrunedEval = (Arc<dyn Evaluator>, usize);
+
+/// Where one pruning starts (see `Tracer::prune_plan`).
+struct PrunePlan<'p> {
+    // The evaluator the pruned one falls back on outside its region.
+    source: &'p Arc<dyn Evaluator>,
+    // The tape pruned.
+    tape: &'p Tape,
+    // What answers for the region now, and its length.
+    answer: &'p Arc<dyn Evaluator>,
+    before: usize,
+    // `gain` of the answer, and the longest child that pays.
+    gain: usize,
+    most: usize,
+}
+
 /// Shared read-only state of one render.
 pub(crate) struct Tracer<'a> {
     /// The camera at the traced resolution.
@@ -457,6 +474,56 @@ impl<'a> Tracer<'a> {
         })
     }
 
+    /// [`Tracer::pruned_to`] for each of `regions` (sibling blocks), the
+    /// same evaluators, with the regions that prune from one tape pruned
+    /// in one pass over it (`Tape::prune_batch`).
+    pub(crate) fn pruned_to_batch(
+        &self,
+        regions: &[IBox],
+        st: &mut TileState,
+    ) -> Vec<Option<PrunedEvals>> {
+        if !self.prune || self.tapes.iter().all(Option::is_none) {
+            return vec![None; regions.len()];
+        }
+        // Per object, per region: its pruned evaluator, if any.
+        let mut pruned: Vec<Vec<Option<PrunedEval>>> = Vec::with_capacity(self.evals.len());
+        for (k, e) in self.evals.iter().enumerate() {
+            let mut out = vec![None; regions.len()];
+            if self.tapes[k].is_some() {
+                let plans: Vec<Option<PrunePlan>> = regions
+                    .iter()
+                    .map(|&r| self.prune_plan(k, e, r, PRUNE_MIN_OPS))
+                    .collect();
+                // Regions that prune from the same tape with the same
+                // limit go in one batch.
+                let mut done = vec![false; regions.len()];
+                for i in 0..regions.len() {
+                    let Some(plan) = plans[i].as_ref().filter(|_| !done[i]) else {
+                        continue;
+                    };
+                    let same: Vec<usize> = (i..regions.len())
+                        .filter(|&j| {
+                            plans[j].as_ref().is_some_and(|q| {
+                                std::ptr::eq(q.tape, plan.tape) && q.most == plan.most
+                            })
+                        })
+                        .collect();
+                    let boxes: Vec<IBox> = same.iter().map(|&j| regions[j]).collect();
+                    let children = plan.tape.prune_batch(&boxes, plan.most, &mut st.workspace);
+                    for (&j, child) in same.iter().zip(children) {
+                        done[j] = true;
+                        let plan = plans[j].as_ref().expect("planned");
+                        out[j] = child.map(|c| self.prune_finish(plan, regions[j], c, st));
+                    }
+                }
+            }
+            pruned.push(out);
+        }
+        (0..regions.len())
+            .map(|i| self.replace_evals(|k, _| pruned[k][i].take()))
+            .collect()
+    }
+
     // Object `k`'s evaluator `e` pruned to `region`, and its op count, if
     // that shrinks it enough: pruned from the smallest region that holds
     // `region` (up `e`'s parents, then down its tree of sub-regions).
@@ -468,6 +535,24 @@ impl<'a> Tracer<'a> {
         min_ops: usize,
         st: &mut TileState,
     ) -> Option<(Arc<dyn Evaluator>, usize)> {
+        let plan = self.prune_plan(k, e, region, min_ops)?;
+        let p = plan
+            .tape
+            .prune_to_at_most(region, plan.most, &mut st.workspace)?;
+        Some(self.prune_finish(&plan, region, p, st))
+    }
+
+    // What pruning object `k`'s evaluator `e` to `region` starts from:
+    // the smallest region that holds `region` (up `e`'s parents, then down
+    // its tree of sub-regions), and how long a child may be to pay;
+    // `None` where it would not.
+    fn prune_plan<'p>(
+        &'p self,
+        k: usize,
+        e: &'p Arc<dyn Evaluator>,
+        region: IBox,
+        min_ops: usize,
+    ) -> Option<PrunePlan<'p>> {
         let mut source = e;
         while let (Some(r), Some(p)) = (source.valid_region(), source.parent()) {
             if box_within(&region, &r) {
@@ -497,17 +582,34 @@ impl<'a> Tracer<'a> {
         let g = gain(answer.as_ref());
         let any = answer.is_native() && !answer.derivatives_native();
         let most = if any { tape.len() - 1 } else { before / g };
-        let p = tape.prune_to_at_most(region, most, &mut st.workspace)?;
+        Some(PrunePlan {
+            source,
+            tape,
+            answer,
+            before,
+            gain: g,
+            most,
+        })
+    }
+
+    // The evaluator of `plan`'s pruning `p` to `region`, and its op count.
+    fn prune_finish(
+        &self,
+        plan: &PrunePlan<'_>,
+        region: IBox,
+        p: crate::eval::tape::PrunedTape,
+        st: &mut TileState,
+    ) -> (Arc<dyn Evaluator>, usize) {
         let after = p.tape.len();
-        let pruned = if after * g <= before {
-            st.stats.pruned_ops_before += before as u64;
+        let pruned = if after * plan.gain <= plan.before {
+            st.stats.pruned_ops_before += plan.before as u64;
             st.stats.pruned_ops_after += after as u64;
-            Regional::new(region, p.tape, Arc::clone(source))
+            Regional::new(region, p.tape, Arc::clone(plan.source))
         } else {
-            let answer = (Arc::clone(answer), before);
-            Regional::delegating(region, p.tape, answer, Arc::clone(source))
+            let answer = (Arc::clone(plan.answer), plan.before);
+            Regional::delegating(region, p.tape, answer, Arc::clone(plan.source))
         };
-        Some((Arc::new(pruned) as Arc<dyn Evaluator>, after))
+        (Arc::new(pruned) as Arc<dyn Evaluator>, after)
     }
 
     // The evaluators with each one `replace` gives (and its op count) in

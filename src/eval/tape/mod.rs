@@ -167,6 +167,9 @@ pub struct Workspace {
     // The kept ops, last first (see `liveness`).
     order: Vec<u32>,
     child: ChildScratch,
+    // Per box of `Tape::prune_batch`: its decided `min`/`max` ops, each
+    // with the operand it picks, in tape order.
+    picks: Vec<Picks>,
 }
 
 thread_local! {
@@ -293,6 +296,75 @@ impl Tape {
             tape: Tape::write_child(&self.ssa, alias, &ws.order, &mut ws.child),
             decided,
         })
+    }
+
+    /// [`Tape::prune_to_at_most`] to each of `boxes`, the same tapes, with
+    /// one forward pass over the tape for all of them: each instruction is
+    /// dispatched once and applied box after box, as in batch evaluation,
+    /// where one pass per box dispatched every instruction again (twice
+    /// the cost of an interval evaluation, for a pass that is mostly that).
+    /// Sibling regions (the quarters of a block, the tiles of a group)
+    /// prune from the same parent, so they come in batches.
+    pub fn prune_batch(
+        &self,
+        boxes: &[[Interval; 3]],
+        max_len: usize,
+        ws: &mut Workspace,
+    ) -> Vec<Option<PrunedTape>> {
+        let lanes = boxes.len();
+        let ops = &self.ssa.ops;
+        let Workspace {
+            intervals,
+            facts,
+            alias,
+            live,
+            order,
+            child,
+            picks,
+            ..
+        } = ws;
+        let cells = self.registers * lanes;
+        if intervals.len() < cells {
+            intervals.resize(cells, Interval::point(0.0));
+        }
+        if facts.len() < cells {
+            facts.resize(cells, Facts::default());
+        }
+        if picks.len() < lanes {
+            picks.resize_with(lanes, Vec::new);
+        }
+        let picks = &mut picks[..lanes];
+        picks.iter_mut().for_each(Vec::clear);
+        let lanes_pass = LanesPass {
+            iv: &mut intervals[..cells],
+            fact: &mut facts[..cells],
+            lanes,
+        };
+        lanes_pass.run(&self.code, ops, boxes, picks);
+        // Each box's child, written from its picks through one alias
+        // table that is the identity between boxes.
+        alias.clear();
+        alias.extend(0..ops.len());
+        picks
+            .iter()
+            .map(|p| {
+                if p.is_empty() {
+                    return None;
+                }
+                for &(k, w) in p.iter() {
+                    alias[k as usize] = alias[w as usize];
+                }
+                let kept = liveness(&self.ssa, alias, live, order);
+                let written = (kept <= max_len).then(|| PrunedTape {
+                    tape: Tape::write_child(&self.ssa, alias, order, child),
+                    decided: p.len(),
+                });
+                for &(k, _) in p.iter() {
+                    alias[k as usize] = k as usize;
+                }
+                written
+            })
+            .collect()
     }
 
     /// The one backward pass that writes a tape: the ops of `parent` that
@@ -492,6 +564,128 @@ fn prune_pass<V: Registers<Interval> + ?Sized, F: Registers<Facts> + ?Sized>(
         fact.set(out, f);
     }
     decided
+}
+
+/// One box's decided `min`/`max` ops in a batched pruning, each with the
+/// op it always equals there (the operand it picks), in tape order.
+type Picks = Vec<(u32, u32)>;
+
+/// Pruning's forward pass over many boxes at once: per register, a
+/// column of one value and its facts per box.
+struct LanesPass<'w> {
+    iv: &'w mut [Interval],
+    fact: &'w mut [Facts],
+    lanes: usize,
+}
+
+impl LanesPass<'_> {
+    // Runs `code` (the instructions of `ops`) over `boxes`, pushing each
+    // box's decided `min`/`max` ops, with the operand each picks, to its
+    // list in `picks`.
+    fn run(mut self, code: &[Instr], ops: &[Op], boxes: &[[Interval; 3]], picks: &mut [Picks]) {
+        // One dispatch per instruction, then a loop over the boxes with
+        // the op fixed (see `prune_pass`).
+        for (k, instr) in code.iter().enumerate() {
+            match *instr {
+                Instr::Var(o, var) => {
+                    for (j, b) in boxes.iter().enumerate() {
+                        let v = b[var.index()];
+                        self.put(o, j, v, var_facts(v));
+                    }
+                }
+                Instr::Const(o, c) => {
+                    let (v, f) = (Interval::point(c), const_facts(c));
+                    for j in 0..self.lanes {
+                        self.put(o, j, v, f);
+                    }
+                }
+                Instr::Add(o, x, y) => self.binary(o, [x, y], BinaryOp::Add, Interval::add),
+                Instr::Sub(o, x, y) => self.binary(o, [x, y], BinaryOp::Sub, Interval::sub),
+                Instr::Mul(o, x, y) => self.binary(o, [x, y], BinaryOp::Mul, Interval::mul),
+                Instr::Min(o, x, y) => {
+                    self.choice(o, [x, y], BinaryOp::Min, Interval::min, (k, ops, picks))
+                }
+                Instr::Max(o, x, y) => {
+                    self.choice(o, [x, y], BinaryOp::Max, Interval::max, (k, ops, picks))
+                }
+                Instr::Binary(o, op, x, y) => {
+                    self.binary(o, [x, y], op, |p, q| interval_binary_inline(op, p, q))
+                }
+                Instr::Neg(o, x) => self.unary(o, x, UnaryOp::Neg, Interval::neg),
+                Instr::Square(o, x) => self.unary(o, x, UnaryOp::Square, Interval::square),
+                Instr::Sqrt(o, x) => self.unary(o, x, UnaryOp::Sqrt, Interval::sqrt),
+                Instr::Unary(o, u, x) => self.unary(o, x, u, |p| interval_unary_inline(u, p)),
+                Instr::Powi(o, x, p) => {
+                    for j in 0..self.lanes {
+                        let a = self.at(x, j);
+                        let v = a.0.powi(p);
+                        self.put(o, j, v, powi_facts(p, a, v));
+                    }
+                }
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn at(&self, r: Reg, j: usize) -> (Interval, Facts) {
+        let i = r as usize * self.lanes + j;
+        (self.iv[i], self.fact[i])
+    }
+
+    #[inline(always)]
+    fn put(&mut self, r: Reg, j: usize, v: Interval, f: Facts) {
+        let i = r as usize * self.lanes + j;
+        self.iv[i] = v;
+        self.fact[i] = f;
+    }
+
+    #[inline(always)]
+    fn unary(&mut self, o: Reg, x: Reg, u: UnaryOp, value: impl Fn(Interval) -> Interval) {
+        for j in 0..self.lanes {
+            let a = self.at(x, j);
+            let v = value(a.0);
+            self.put(o, j, v, unary_facts(u, a, v));
+        }
+    }
+
+    #[inline(always)]
+    fn binary(
+        &mut self,
+        o: Reg,
+        [x, y]: [Reg; 2],
+        op: BinaryOp,
+        value: impl Fn(Interval, Interval) -> Interval,
+    ) {
+        for j in 0..self.lanes {
+            let (a, b) = (self.at(x, j), self.at(y, j));
+            let v = value(a.0, b.0);
+            self.put(o, j, v, binary_facts(op, a, b, v));
+        }
+    }
+
+    // A `min` or `max` at op `k` of `ops`: as `binary`, and the operand
+    // it picks on each box where one is proven.
+    #[inline(always)]
+    fn choice(
+        &mut self,
+        o: Reg,
+        [x, y]: [Reg; 2],
+        op: BinaryOp,
+        value: impl Fn(Interval, Interval) -> Interval,
+        (k, ops, picks): (usize, &[Op], &mut [Picks]),
+    ) {
+        let Op::Binary(_, xa, ya) = ops[k] else {
+            unreachable!("a min or max instruction is a binary op");
+        };
+        for (j, p) in picks.iter_mut().enumerate() {
+            let (a, b) = (self.at(x, j), self.at(y, j));
+            if let Some(w) = decided_operand(op, a, b) {
+                p.push((k as u32, [xa, ya][w].0));
+            }
+            let v = value(a.0, b.0);
+            self.put(o, j, v, binary_facts(op, a, b, v));
+        }
+    }
 }
 
 /// One step of pruning's forward pass over `u(x)` written to `o`: its

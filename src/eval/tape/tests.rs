@@ -196,6 +196,50 @@ fn pruned_random_functions_keep_their_bits_in_the_box() {
     assert!(pruned > 20, "only {pruned} random functions pruned");
 }
 
+// One pass over a batch of boxes writes the tapes that pruning to each
+// box alone writes, bit for bit, whatever the batch's size, and the same
+// length limit refuses the same boxes.
+#[test]
+fn batched_pruning_writes_each_boxs_own_tape() {
+    let mut rng = Rng::new(23);
+    let mut ws = Workspace::default();
+    let (mut pruned, mut refused) = (0, 0);
+    for seed in 0..300 {
+        let tape = Tape::new(&random_function(seed, 9));
+        let lanes = 1 + seed as usize % 7;
+        let boxes: Vec<[Interval; 3]> = (0..lanes)
+            .map(|_| random_box(&mut rng, [0.3, 1.0, 3.0][seed as usize % 3]))
+            .collect();
+        let max_len = if seed % 4 == 0 {
+            tape.len() / 2
+        } else {
+            usize::MAX
+        };
+        let batch = tape.prune_batch(&boxes, max_len, &mut ws);
+        assert_eq!(batch.len(), lanes);
+        for (b, got) in boxes.iter().zip(&batch) {
+            let alone = tape.prune_to_at_most(*b, max_len, &mut ws);
+            match (got, &alone) {
+                (Some(g), Some(a)) => {
+                    assert_eq!(g.tape, a.tape, "seed {seed}");
+                    assert_eq!(g.decided, a.decided, "seed {seed}");
+                    pruned += 1;
+                }
+                (None, None) => refused += 1,
+                _ => panic!(
+                    "seed {seed}: batch {} alone {}",
+                    got.is_some(),
+                    alone.is_some()
+                ),
+            }
+        }
+    }
+    assert!(
+        pruned > 50 && refused > 50,
+        "pruned {pruned}, refused {refused}"
+    );
+}
+
 // A function whose tape keeps `n` values alive at once: each
 // `x·y + c_i` joins a sum and, after all of them, a max, so every one
 // waits in a register from the sum to the max.
