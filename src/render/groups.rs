@@ -23,10 +23,10 @@
 //! memory holds one row of groups, not the image's.
 
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock, TryLockError};
 
 use super::TILE;
-use super::tracer::{PrunedEvals, TileState, Tracer};
+use super::tracer::{PRUNE_MIN_OPS, PrunedEvals, TileState, Tracer};
 use crate::eval::Evaluator;
 use crate::eval::tape::Tape;
 use crate::interval::Interval;
@@ -66,7 +66,18 @@ type Slot = Arc<OnceLock<Group>>;
 #[derive(Default)]
 pub(crate) struct TileGroups {
     groups: Mutex<HashMap<(u32, u32), Slot>>,
+    // In a flat scene, per row of groups: each group's tapes, the row's
+    // groups pruned from the whole functions in one batch by the first
+    // group of the row built (`row_tapes`).
+    rows: Mutex<HashMap<u32, RowSlot>>,
 }
+
+/// A row of groups' tapes (see [`row_tapes`]), pruned once by the first
+/// group of the row built.
+type RowSlot = Arc<Mutex<Option<RowTapes>>>;
+
+/// Each group's [`TileTapes`] in a row of groups.
+type RowTapes = Arc<Vec<Option<TileTapes>>>;
 
 impl TileGroups {
     /// The evaluators of the group holding the pixel `(x, y)` and the
@@ -93,8 +104,30 @@ impl TileGroups {
             let mut map = self.groups.lock().unwrap_or_else(|e| e.into_inner());
             Arc::clone(map.entry(key).or_default())
         };
-        slot.get_or_init(|| build(tr, key, st));
+        slot.get_or_init(|| {
+            let row = tr.flat.then(|| self.row(tr, key.1, st)).flatten();
+            let pre = row.as_ref().and_then(|r| r.get(key.0 as usize)?.as_ref());
+            build(tr, key, pre, st)
+        });
         slot
+    }
+
+    // The tapes of row `gy`'s groups, pruned now if no group of the row
+    // has been built yet; `None` while another thread prunes them: the
+    // group then prunes its own rather than wait (the same tapes).
+    fn row(&self, tr: &Tracer<'_>, gy: u32, st: &mut TileState) -> Option<RowTapes> {
+        let slot = {
+            let mut map = self.rows.lock().unwrap_or_else(|e| e.into_inner());
+            Arc::clone(map.entry(gy).or_default())
+        };
+        let mut row = match slot.try_lock() {
+            Ok(row) => row,
+            Err(TryLockError::WouldBlock) => return None,
+            Err(TryLockError::Poisoned(e)) => e.into_inner(),
+        };
+        Some(Arc::clone(
+            row.get_or_insert_with(|| Arc::new(row_tapes(tr, gy, st))),
+        ))
     }
 
     /// Whether the groups' evaluators prove every object positive or
@@ -129,6 +162,8 @@ impl TileGroups {
     pub(crate) fn release_above(&self, y: u32) {
         let mut map = self.groups.lock().unwrap_or_else(|e| e.into_inner());
         map.retain(|&(_, gy), _| (gy + 1) * GROUP_SIDE > y);
+        let mut rows = self.rows.lock().unwrap_or_else(|e| e.into_inner());
+        rows.retain(|&gy, _| (gy + 1) * GROUP_SIDE > y);
     }
 }
 
@@ -137,16 +172,18 @@ impl TileGroups {
 // the bounds, and to its slices along the rays (see
 // `Tracer::pruned_group`). A tape that does not shrink enough to answer
 // (see `Tracer::pruned_to_beam`) is kept to prune the tiles' from.
-fn build(tr: &Tracer<'_>, (gx, gy): (u32, u32), st: &mut TileState) -> Group {
-    let x0 = gx * GROUP_SIDE;
-    let y0 = gy * GROUP_SIDE;
-    let x1 = (x0 + GROUP_SIDE).min(tr.cam.width);
-    let y1 = (y0 + GROUP_SIDE).min(tr.cam.height);
+fn build(
+    tr: &Tracer<'_>,
+    (gx, gy): (u32, u32),
+    pre: Option<&TileTapes>,
+    st: &mut TileState,
+) -> Group {
+    let ((x0, y0), (x1, y1)) = group_pixels(tr, (gx, gy));
     let xs = (f64::from(x0) + 0.5, f64::from(x1) - 0.5);
     let ys = (f64::from(y0) + 0.5, f64::from(y1) - 0.5);
     let t = beam_range(tr, xs, ys)?;
     let region = tr.beam_region(xs, ys, t)?;
-    let evals = tr.pruned_group(xs, ys, t, st)?;
+    let evals = tr.pruned_group(xs, ys, t, pre, st)?;
     let empty = empty_tiles(tr, &evals.0, (x0, y0), (x1, y1), st);
     let tiles = if tr.flat {
         tile_tapes(tr, &evals.0, (x0, y0), (x1, y1), &empty, st)
@@ -154,6 +191,63 @@ fn build(tr: &Tracer<'_>, (gx, gy): (u32, u32), st: &mut TileState) -> Group {
         Vec::new()
     };
     Some((evals, region, empty, tiles))
+}
+
+// The pixels `x0..x1 × y0..y1` of group `(gx, gy)`, as `(x0, y0), (x1,
+// y1)`.
+fn group_pixels(tr: &Tracer<'_>, (gx, gy): (u32, u32)) -> ((u32, u32), (u32, u32)) {
+    let (x0, y0) = (gx * GROUP_SIDE, gy * GROUP_SIDE);
+    let x1 = (x0 + GROUP_SIDE).min(tr.cam.width);
+    let y1 = (y0 + GROUP_SIDE).min(tr.cam.height);
+    ((x0, y0), (x1, y1))
+}
+
+// Per group of row `gy` of a flat scene: the whole functions that
+// `Tracer::pruned_group` prunes, pruned to the region it prunes the
+// group's beam to, the row's groups in one pass over each function's
+// tape (pruning each group's from the whole function on its own was a
+// sixteenth of prospero's render).
+fn row_tapes(tr: &Tracer<'_>, gy: u32, st: &mut TileState) -> Vec<Option<TileTapes>> {
+    let groups = tr.cam.width.div_ceil(GROUP_SIDE);
+    let mut regions = Vec::with_capacity(groups as usize);
+    let mut at = Vec::with_capacity(groups as usize);
+    for gx in 0..groups {
+        let ((x0, y0), (x1, y1)) = group_pixels(tr, (gx, gy));
+        let xs = (f64::from(x0) + 0.5, f64::from(x1) - 0.5);
+        let ys = (f64::from(y0) + 0.5, f64::from(y1) - 0.5);
+        let corners = tr.cam.corners(xs, ys);
+        if let Some(region) = beam_range(tr, xs, ys)
+            .and_then(|t| tr.corner_region(&corners, super::slices::group_reach(t)))
+        {
+            regions.push(region);
+            at.push(gx as usize);
+        }
+    }
+    let mut row: Vec<Option<TileTapes>> = vec![None; groups as usize];
+    if regions.is_empty() {
+        return row;
+    }
+    let mut per_object: Vec<Vec<Option<Option<Tape>>>> = Vec::with_capacity(tr.evals.len());
+    for (k, e) in tr.evals.iter().enumerate() {
+        let tape = tr.tapes[k]
+            .as_deref()
+            .filter(|_| tr.live_ops[k] >= PRUNE_MIN_OPS && e.as_regional().is_none());
+        per_object.push(match tape {
+            Some(tape) => tape
+                .prune_batch(&regions, usize::MAX, &mut st.workspace)
+                .into_iter()
+                .map(|p| Some(p.map(|p| p.tape)))
+                .collect(),
+            None => vec![None; regions.len()],
+        });
+    }
+    for (i, (&gx, &region)) in at.iter().zip(&regions).enumerate() {
+        row[gx] = Some(TileTapes {
+            region,
+            tapes: per_object.iter_mut().map(|o| o[i].take()).collect(),
+        });
+    }
+    row
 }
 
 // The slot in its group's per-tile vectors of the tile holding pixel

@@ -53,11 +53,12 @@ pub(crate) struct TileSurfs {
 impl TileSurfs {
     const NONE: u32 = u32::MAX;
 
-    /// No surface on any of `n` pixels.
-    pub(crate) fn new(n: usize) -> TileSurfs {
+    /// No surface on any of `n` pixels yet, room for `hits` of them (a
+    /// list grown hit by hit was a tenth of a flat tile's shading).
+    pub(crate) fn new(n: usize, hits: usize) -> TileSurfs {
         TileSurfs {
             at: vec![Self::NONE; n],
-            list: Vec::new(),
+            list: Vec::with_capacity(hits),
         }
     }
 

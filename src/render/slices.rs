@@ -98,17 +98,20 @@ impl Tracer<'_> {
     /// pruned from the whole function, down to slices about as deep as the
     /// group is wide (a tile's slices, four times narrower, stop at twice
     /// their width), for its tiles' slices to prune from.
+    /// Where `pre` is given, its tapes (pruned to the group's region, see
+    /// `groups::TileTapes`) are taken instead of pruning again.
     pub(crate) fn pruned_group(
         &self,
         xs: (f64, f64),
         ys: (f64, f64),
         t: Interval,
+        pre: Option<&TileTapes>,
         st: &mut TileState,
     ) -> Option<PrunedEvals> {
         if !self.prune {
             return None;
         }
-        self.beam_trees(xs, ys, t, (None, None), true, st)
+        self.beam_trees(xs, ys, t, (None, pre), true, st)
     }
 
     // Each large function's tree of regions along the beam through `xs ×
@@ -191,12 +194,7 @@ impl Beam<'_> {
         // A group's regions reach a little further along the rays: its
         // tiles' slices, whose ranges come from their own pixels, then
         // fit inside them despite rounding.
-        let reach = if self.is_group {
-            let slack = GROUP_SLACK * t.width();
-            Interval::new(t.lo - slack, t.hi + slack)
-        } else {
-            t
-        };
+        let reach = if self.is_group { group_reach(t) } else { t };
         let region = tr.corner_region(&self.corners, reach)?;
         let held = self
             .group
@@ -267,3 +265,10 @@ const LONG_ASPECT: f64 = 6.0;
 /// How much further along the rays than its own range, relative to it, a
 /// group's region reaches (see `Beam::node`).
 const GROUP_SLACK: f64 = 1e-6;
+
+/// The range along the rays a group's region over `t` reaches (see
+/// `Beam::node`).
+pub(crate) fn group_reach(t: Interval) -> Interval {
+    let slack = GROUP_SLACK * t.width();
+    Interval::new(t.lo - slack, t.hi + slack)
+}

@@ -132,7 +132,7 @@ pub(crate) fn render_tile(
     // Hit points lie in the tile's beam: their normals may come from the
     // pruned functions too (the same bits).
     let t_shade = Instant::now();
-    let mut surfs = TileSurfs::new(n);
+    let mut surfs = TileSurfs::new(n, tile.hits.iter().flatten().count());
     for (k, h) in tile.hits.iter().enumerate() {
         if let Some(h) = h {
             surfs.set(k, shade::surface(tr_vis, &tile.ray(k), h, &mut st.stats));
