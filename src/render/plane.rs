@@ -146,7 +146,17 @@ pub(crate) fn trace_tile(tr: &Tracer<'_>, tile: &mut TileRays, h: u32, st: &mut 
         return;
     };
     let live: Vec<u32> = (0..tr.evals.len() as u32).collect();
-    level(tr, tile, &plane, &[tile.whole()], &live, st);
+    // A tile reaches here only where its group, or its own interval,
+    // did not prove it empty: its quarters are tested at once, not the
+    // whole tile first, which would seldom decide it (a tile wholly
+    // inside a solid: its quarters say the same).
+    let whole = tile.whole();
+    let top: Vec<Rect> = if whole.pixel_count() > SMALL_PIXELS {
+        whole.quarters_by_column().collect()
+    } else {
+        vec![whole]
+    };
+    level(tr, tile, &plane, &top, &live, st);
 }
 
 // Decides the rectangles `rects` (the quarters of one rectangle, or the
@@ -187,8 +197,7 @@ fn level(
             continue;
         }
         let live = &sub_live[r];
-        let pixels = rect.x1 - rect.x0;
-        let pixels = pixels * (rect.y1 - rect.y0);
+        let pixels = rect.pixel_count();
         if live.is_empty() {
             st.stats.blocks_rejected += u64::from(pixels > 1);
             set_block(tile, rect, Class::Background);
@@ -290,7 +299,7 @@ fn small(
                 set_block(tile, q, Class::Background);
             } else if neg[r] || single {
                 add(tile, q, neg[r], &mut open);
-            } else if (q.x1 - q.x0) * (q.y1 - q.y0) <= DIRECT_PIXELS {
+            } else if q.pixel_count() <= DIRECT_PIXELS {
                 // Its pixels' own tests (`settle`) cost less than a
                 // level of single-pixel intervals before them, which
                 // those that start inside would repeat as points.

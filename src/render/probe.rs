@@ -40,6 +40,11 @@ impl Rect {
         self.x1 - self.x0 == 1 && self.y1 - self.y0 == 1
     }
 
+    /// How many pixels the block holds.
+    pub(crate) fn pixel_count(&self) -> u32 {
+        (self.x1 - self.x0) * (self.y1 - self.y0)
+    }
+
     /// The pixels of the block, row by row.
     pub(crate) fn pixels(&self) -> impl Iterator<Item = (u32, u32)> + use<> {
         let Rect { x0, y0, x1, y1 } = *self;

@@ -48,6 +48,8 @@ pub(crate) struct TileSurfs {
     // Per pixel: the index of its surface in `list` (`NONE`: no hit).
     at: Vec<u32>,
     list: Vec<Surf>,
+    // Per surface in `list`: its pixel.
+    pixel: Vec<u32>,
 }
 
 impl TileSurfs {
@@ -59,7 +61,13 @@ impl TileSurfs {
         TileSurfs {
             at: vec![Self::NONE; n],
             list: Vec::with_capacity(hits),
+            pixel: Vec::with_capacity(hits),
         }
+    }
+
+    /// Each surface with its pixel, in the order they were set.
+    pub(crate) fn iter(&self) -> impl Iterator<Item = (usize, &Surf)> {
+        self.pixel.iter().map(|&k| k as usize).zip(&self.list)
     }
 
     /// Pixels of the tile.
@@ -72,6 +80,7 @@ impl TileSurfs {
         debug_assert_eq!(self.at[k], Self::NONE);
         self.at[k] = self.list.len() as u32;
         self.list.push(s);
+        self.pixel.push(k as u32);
     }
 
     /// Pixel `k`'s surface, if it hit.
@@ -152,6 +161,10 @@ pub(crate) fn mend_singular_normals(
     surfs: &mut TileSurfs,
     st: &mut RenderStats,
 ) {
+    // Only surfaces with a gradient (no cut faces) can be near-singular.
+    if surfs.list.iter().all(|s| !s.grad_len.is_finite()) {
+        return;
+    }
     let mut largest = vec![0.0f64; tr.evals.len()];
     for (k, h) in hits.iter().enumerate() {
         if let (Some(h), Some(s)) = (h, surfs.get(k))

@@ -520,25 +520,23 @@ fn shade_pixels(
     // Per light, where the last shadowed sample's segment met a solid
     // (see `shadow::point_segment_free`).
     let mut blockers = vec![None; nl];
-    for k in 0..n {
-        if let Some(s) = surfs.get(k) {
-            let t0 = any_shadows.then(Instant::now);
-            let (c, sh) = shade::shade(
-                tr,
-                s,
-                (
-                    &lit_by_beam[k * nl..(k + 1) * nl],
-                    known.get(k).copied().flatten(),
-                ),
-                &mut blockers,
-                ts,
-            );
-            shadow_ms += t0.map_or(0.0, ms_since);
-            linear[k] = c.to_array();
-            shadowed[k] = sh;
-            if let Some(nv) = normals.as_mut() {
-                nv[k] = s.n.to_array();
-            }
+    for (k, s) in surfs.iter() {
+        let t0 = any_shadows.then(Instant::now);
+        let (c, sh) = shade::shade(
+            tr,
+            s,
+            (
+                &lit_by_beam[k * nl..(k + 1) * nl],
+                known.get(k).copied().flatten(),
+            ),
+            &mut blockers,
+            ts,
+        );
+        shadow_ms += t0.map_or(0.0, ms_since);
+        linear[k] = c.to_array();
+        shadowed[k] = sh;
+        if let Some(nv) = normals.as_mut() {
+            nv[k] = s.n.to_array();
         }
     }
     // Per-pixel lighting time is dominated by shadow segments.
