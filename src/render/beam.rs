@@ -98,14 +98,20 @@ impl TileRays {
         }
     }
 
-    /// The slab range of pixel `k` inside `bounds`, as the tile holds it or
-    /// (where it holds none: a flat scene's tile, never masked or floored)
-    /// as `tile::tile_rays` would compute it.
-    pub(crate) fn slab(&self, k: usize, bounds: &crate::scene::Bounds) -> Option<(f64, f64)> {
-        match self.slabs.get(k) {
+    /// Pixel `k`'s ray and its slab range inside `bounds`, as the tile
+    /// holds them or (where it holds none: a flat scene's tile, never
+    /// masked or floored) as `tile::tile_rays` would compute them.
+    pub(crate) fn ray_and_slab(
+        &self,
+        k: usize,
+        bounds: &crate::scene::Bounds,
+    ) -> (PixelRay, Option<(f64, f64)>) {
+        let ray = self.ray(k);
+        let slab = match self.slabs.get(k) {
             Some(s) => *s,
-            None => self.ray(k).slab(bounds),
-        }
+            None => ray.slab(bounds),
+        };
+        (ray, slab)
     }
 }
 
