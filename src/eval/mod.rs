@@ -109,6 +109,14 @@ pub trait Evaluator: Send + Sync {
         }
     }
 
+    /// `out[i]` = f and its gradient at `(xs[i], ys[i], zs[i])`, the same
+    /// bits as [`Evaluator::point_grad`] at each point.
+    fn point_grad_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [Grad]) {
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = self.point_grad([xs[i], ys[i], zs[i]]);
+        }
+    }
+
     /// `out[i] = F(boxes[i])` for every i.
     fn interval_batch(&self, boxes: &[[Interval; 3]], out: &mut [Interval]) {
         for (b, o) in boxes.iter().zip(out.iter_mut()) {

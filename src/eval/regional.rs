@@ -214,24 +214,29 @@ impl Evaluator for Regional {
     /// point; point by point when the points leave the region. The same
     /// bits either way (pruning is exact).
     fn point_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
-        // A NaN coordinate would vanish from the hull below; such a point
-        // goes to the point-by-point path, as `point` sends it to the parent.
-        let any_nan = xs.iter().chain(ys).chain(zs).any(|v| v.is_nan());
-        let hull = (!out.is_empty() && !any_nan)
-            .then(|| {
-                let span = |v: &[f64]| {
-                    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-                    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-                    Interval::new(lo, hi)
-                };
-                [span(xs), span(ys), span(zs)]
-            })
-            .filter(|h| h.iter().all(|c| c.lo <= c.hi));
-        match hull.as_ref().and_then(|h| self.answer_for(h)) {
+        match point_hull(xs, ys, zs).and_then(|h| self.answer_for(&h)) {
             Some(answer) => answer.point_batch(xs, ys, zs, out),
             None => {
                 for (i, o) in out.iter_mut().enumerate() {
                     *o = self.point([xs[i], ys[i], zs[i]]);
+                }
+            }
+        }
+    }
+
+    /// One batch on what answers for derivatives over the smallest region
+    /// holding every point; point by point when the points leave the
+    /// region. The same bits either way: pruning keeps a decided
+    /// `min`/`max`'s winner, whose partials the node picks at every point
+    /// of the region.
+    fn point_grad_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [Grad]) {
+        match point_hull(xs, ys, zs).filter(|h| box_within(h, &self.region)) {
+            Some(hull) => self
+                .for_derivatives(&hull)
+                .point_grad_batch(xs, ys, zs, out),
+            None => {
+                for (i, o) in out.iter_mut().enumerate() {
+                    *o = self.point_grad([xs[i], ys[i], zs[i]]);
                 }
             }
         }
@@ -289,6 +294,22 @@ impl Evaluator for Regional {
     fn as_regional(&self) -> Option<&Regional> {
         Some(self)
     }
+}
+
+/// The box spanned by the points `(xs[i], ys[i], zs[i])`; `None` for no
+/// points or where a coordinate is NaN (which would vanish from the hull:
+/// such a point goes point by point, as `point` sends it to the parent).
+fn point_hull(xs: &[f64], ys: &[f64], zs: &[f64]) -> Option<IBox> {
+    let any_nan = xs.iter().chain(ys).chain(zs).any(|v| v.is_nan());
+    if xs.is_empty() || any_nan {
+        return None;
+    }
+    let span = |v: &[f64]| {
+        let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        Interval::new(lo, hi)
+    };
+    Some([span(xs), span(ys), span(zs)]).filter(|h| h.iter().all(|c| c.lo <= c.hi))
 }
 
 #[cfg(test)]

@@ -74,6 +74,16 @@ impl Evaluator for TapeEvaluator {
         })
     }
 
+    fn point_grad_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [Grad]) {
+        with_workspace(|ws| {
+            for (i, out) in out.chunks_mut(CHUNK).enumerate() {
+                let r = i * CHUNK..i * CHUNK + out.len();
+                let cols = [&xs[r.clone()], &ys[r.clone()], &zs[r]];
+                self.tape.point_grad_batch(cols, out, ws);
+            }
+        })
+    }
+
     fn interval_batch(&self, boxes: &[[Interval; 3]], out: &mut [Interval]) {
         with_workspace(|ws| {
             for (b, out) in boxes.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {

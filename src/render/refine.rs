@@ -241,14 +241,27 @@ pub(crate) fn refine_batch(
         [only] => vec![(f64::NAN, *only as usize); at_root.len()],
         _ => batch.min_and_object(tr, live, &at_root, st),
     };
-    for ((((i, _, _), &t), &(_, obj)), &p) in
-        searches.iter().zip(&roots).zip(&objects).zip(&at_root)
+    // The normals at the roots, one gradient batch per object.
+    let mut grads = vec![[0.0; 3]; at_root.len()];
+    let mut on: Vec<usize> = objects.iter().map(|&(_, obj)| obj).collect();
+    on.sort_unstable();
+    on.dedup();
+    for obj in on {
+        let at: Vec<usize> = (0..at_root.len())
+            .filter(|&j| objects[j].1 == obj)
+            .collect();
+        let points: Vec<[f64; 3]> = at.iter().map(|&j| at_root[j]).collect();
+        for (&j, g) in at.iter().zip(tr.point_grads(obj, &points, st)) {
+            grads[j] = g.d;
+        }
+    }
+    for ((((i, _, _), &t), &(_, obj)), grad) in searches.iter().zip(&roots).zip(&objects).zip(grads)
     {
         out[*i] = Some(Hit {
             t,
             obj,
             inside: false,
-            grad: Some(tr.point_grad(obj, p, st).d),
+            grad: Some(grad),
         });
     }
     out

@@ -411,6 +411,27 @@ impl<'a> Tracer<'a> {
         self.evals[k].point_grad(p)
     }
 
+    /// [`Tracer::point_grad`] of object `k` at each of `points`, in one
+    /// batch (the same bits).
+    pub(crate) fn point_grads(
+        &self,
+        k: usize,
+        points: &[[f64; 3]],
+        st: &mut RenderStats,
+    ) -> Vec<Grad> {
+        st.point_evals += points.len() as u64;
+        let cols: [Vec<f64>; 3] = std::array::from_fn(|c| points.iter().map(|p| p[c]).collect());
+        let mut out = vec![
+            Grad {
+                v: 0.0,
+                d: [0.0; 3]
+            };
+            points.len()
+        ];
+        self.evals[k].point_grad_batch(&cols[0], &cols[1], &cols[2], &mut out);
+        out
+    }
+
     /// The scene's evaluators pruned to the box of `ray` over `t` (see
     /// [`Tracer::pruned_to`]), for the sub-pieces of a piece of a ray.
     pub(crate) fn pruned_to_ray(

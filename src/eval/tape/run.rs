@@ -66,6 +66,49 @@ impl Tape {
         Grad { v, d }
     }
 
+    /// `out[i]` = f and its gradient at `(xs[i], ys[i], zs[i])`, the same
+    /// bits as [`Tape::point_grad`] at each point: one pass over the tape
+    /// for all of them, a column of values and partials per register.
+    pub fn point_grad_batch(
+        &self,
+        [xs, ys, zs]: [&[f64]; 3],
+        out: &mut [Grad],
+        ws: &mut Workspace,
+    ) {
+        let n = out.len();
+        assert!(xs.len() == n && ys.len() == n && zs.len() == n);
+        // Every register is written before it is read: no clearing.
+        let m = &mut ws.point_duals;
+        if m.len() < self.registers * n {
+            m.resize(self.registers * n, (0.0, [0.0; 3]));
+        }
+        let m = &mut m[..self.registers * n];
+        for instr in &self.code {
+            let col = |r: Reg| r as usize * n;
+            match instr.form() {
+                Form::Var(o, var) => {
+                    let k = var.index();
+                    let mut d = [0.0; 3];
+                    d[k] = 1.0;
+                    let v = [xs, ys, zs][k];
+                    for (slot, &x) in m[col(o)..col(o) + n].iter_mut().zip(v) {
+                        *slot = (x, d);
+                    }
+                }
+                Form::Const(o, c) => m[col(o)..col(o) + n].fill((c, [0.0; 3])),
+                Form::Unary(o, op, a) => apply1(m, n, [o, a], |x| point_dual_unary(op, x)),
+                Form::Binary(o, op, a, b) => {
+                    apply2(m, n, [o, a, b], |x, y| point_dual_binary(op, x, y))
+                }
+                Form::Powi(o, a, k) => apply1(m, n, [o, a], |x| point_dual_powi(x, k)),
+            }
+        }
+        let r = self.root_reg() * n;
+        for (g, &(v, d)) in out.iter_mut().zip(&m[r..r + n]) {
+            *g = Grad { v, d };
+        }
+    }
+
     /// F over `b` and its derivative along every direction in `v`, the
     /// same bits as the reference interpreter's
     /// [`crate::eval::Evaluator::interval_dir`].

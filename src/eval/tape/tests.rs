@@ -49,6 +49,42 @@ fn batches_give_the_interpreters_bits() {
     }
 }
 
+// A gradient batch gives each point's own `point_grad`, to the bit, which
+// gives the interpreter's.
+#[test]
+fn gradient_batches_give_each_points_bits() {
+    let mut rng = Rng::new(29);
+    let mut ws = Workspace::default();
+    for seed in 0..300 {
+        let f = random_function(seed, 9);
+        let tape = Tape::new(&f);
+        let it = Interpreter::new(f);
+        let pts: Vec<[f64; 3]> = (0..1 + seed as usize % 23)
+            .map(|_| std::array::from_fn(|_| rng.range(-3.0, 3.0)))
+            .collect();
+        let cols: [Vec<f64>; 3] = std::array::from_fn(|c| pts.iter().map(|p| p[c]).collect());
+        let mut out = vec![
+            crate::eval::Grad {
+                v: 0.0,
+                d: [0.0; 3]
+            };
+            pts.len()
+        ];
+        tape.point_grad_batch([&cols[0], &cols[1], &cols[2]], &mut out, &mut ws);
+        for (p, g) in pts.iter().zip(&out) {
+            let alone = tape.point_grad(*p, &mut ws);
+            let reference = it.point_grad(*p);
+            for (x, y) in [(g.v, alone.v), (g.v, reference.v)] {
+                assert!(same(x, y), "seed {seed} at {p:?}");
+            }
+            for k in 0..3 {
+                assert!(same(g.d[k], alone.d[k]), "seed {seed} at {p:?}");
+                assert!(same(g.d[k], reference.d[k]), "seed {seed} at {p:?}");
+            }
+        }
+    }
+}
+
 #[test]
 fn scalar_runs_and_directions_give_the_interpreters_bits() {
     let mut rng = Rng::new(17);
