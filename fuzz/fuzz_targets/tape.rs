@@ -4,11 +4,14 @@
 //! turned into an `eval::tape::Tape`.
 //!
 //! Checked, per the contract in `src/eval/tape/mod.rs`:
-//! - batched and single points and boxes, interval gradients and
-//!   derivatives along a box of directions give the same bits as the
-//!   interpreter's `point`, `interval`, `interval_grad` and `interval_dir`
+//! - batched and single points and boxes, batched point gradients,
+//!   interval gradients and derivatives along a box of directions give
+//!   the same bits as the interpreter's `point`, `interval`, `point_grad`,
+//!   `interval_grad` and `interval_dir`
 //!   (NaN equal to NaN, empty equal to empty), at points and boxes from
 //!   the bytes, edge values (signed zeros, infinities, NaN, huge) included;
+//! - pruning to all the boxes in one pass (`Tape::prune_batch`) writes
+//!   the tape that pruning to each box alone writes;
 //! - a tape pruned to a box from the bytes, and that pruned tape pruned
 //!   again to a sub-box (pruning nests), is valid IR and gives the same
 //!   point bits as the whole function at the corners, the centre and
@@ -148,6 +151,16 @@ fuzz_target!(|data: &[u8]| {
             "point at {p:?}: interpreter {w:e}, tape {s:e} ({ctx})"
         );
     }
+    // Gradients of the whole batch in one pass: each point's own bits.
+    let mut grads = vec![ibeam::eval::Grad { v: 0.0, d: [0.0; 3] }; pts.len()];
+    tape.point_grad_batch([&cols[0], &cols[1], &cols[2]], &mut grads, &mut ws);
+    for (p, g) in pts.iter().zip(&grads) {
+        let w = whole.point_grad(*p);
+        assert!(
+            same(w.v, g.v) && (0..3).all(|k| same(w.d[k], g.d[k])),
+            "gradient batch at {p:?}: interpreter {w:?}, tape {g:?} ({ctx})"
+        );
+    }
     let mut boxes: Vec<[Interval; 3]> = rest
         .chunks_exact(6)
         .take(8)
@@ -185,6 +198,18 @@ fuzz_target!(|data: &[u8]| {
             same_iv(td[0], id[0]) && same_iv(td[1], id[1]),
             "derivative along {v:?} over {b:?}: interpreter {id:?}, tape {td:?} ({ctx})"
         );
+    }
+
+    // Pruning to all the boxes in one pass writes each box's own tape.
+    let batch = tape.prune_batch(&boxes, usize::MAX, &mut ws);
+    for (b, got) in boxes.iter().zip(&batch) {
+        let alone = tape.prune(*b, &mut ws);
+        let same_tape = match (got, &alone) {
+            (Some(g), Some(a)) => g.tape == a.tape && g.decided == a.decided,
+            (None, None) => true,
+            _ => false,
+        };
+        assert!(same_tape, "batched pruning over {b:?} differs ({ctx})");
     }
 
     // (b) pruning, and pruning the pruned tape again.
