@@ -90,8 +90,14 @@ pub struct RayCamera {
 /// `1 / |a|` never overflows), but the images must not depend on glam
 /// keeping that test and that arithmetic.
 pub(crate) fn normalize(a: DVec3) -> Option<DVec3> {
+    normalize_with_length(a).0
+}
+
+/// [`normalize`] and the length `|a|` it divides by, for callers that
+/// need both (the same bits as computing each alone).
+pub(crate) fn normalize_with_length(a: DVec3) -> (Option<DVec3>, f64) {
     let n = a.length();
-    (n.is_finite() && n > 0.0).then(|| a * (1.0 / n))
+    ((n.is_finite() && n > 0.0).then(|| a * (1.0 / n)), n)
 }
 
 /// The scene bounds as a box.

@@ -5,9 +5,9 @@
 
 use glam::DVec3;
 
-use super::camera::normalize;
+use super::camera::{normalize, normalize_with_length};
 use super::refine::illinois;
-use super::shadow::{light_dir, point_segment_free};
+use super::shadow::{SegEnd, light_dir, point_segment_free};
 use super::tracer::{TileState, Tracer};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, dot as dot_box, normalize_box};
@@ -102,9 +102,9 @@ pub(crate) fn surface(
     st: &mut RenderStats,
 ) -> Surf {
     let p = DVec3::from_array(ray.at(hit.t));
-    let dm = DVec3::from_array(ray.dm);
-    let v = -normalize(dm).unwrap_or(DVec3::Z);
-    let eps = (1e-4 * tr.diag).max(2.0 * tr.cam.tolerance(hit.t) * dm.length());
+    let (dm, dm_len) = normalize_with_length(DVec3::from_array(ray.dm));
+    let v = -dm.unwrap_or(DVec3::Z);
+    let eps = (1e-4 * tr.diag).max(2.0 * tr.cam.tolerance(hit.t) * dm_len);
     let color = DVec3::from_array(tr.colors[hit.obj]);
     if hit.inside {
         // A cut face at the bounds: face the viewer, start shadows in front.
@@ -121,7 +121,8 @@ pub(crate) fn surface(
     let d = hit
         .grad
         .unwrap_or_else(|| tr.point_grad(hit.obj, p.to_array(), st).d);
-    let nout = normalize(DVec3::from_array(d)).unwrap_or(v);
+    let (nout, grad_len) = normalize_with_length(DVec3::from_array(d));
+    let nout = nout.unwrap_or(v);
     let n = if nout.dot(v) < 0.0 { -nout } else { nout };
     Surf {
         p,
@@ -130,7 +131,7 @@ pub(crate) fn surface(
         v,
         min_w: 0.5 * eps,
         color,
-        grad_len: DVec3::from_array(d).length(),
+        grad_len,
     }
 }
 
@@ -204,20 +205,49 @@ pub(crate) fn mend_singular_normals(
     }
 }
 
+/// What the points [`shade`] lights one after another share, per light:
+/// a directional light's direction, and the half vector of the last view
+/// vector met with it (a parallel camera's is every pixel's). Each is the
+/// same bits as computing it again; two square roots and two divisions a
+/// light and pixel were most of shading a hit.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct LightMemo {
+    lights: Vec<Memo>,
+}
+
+#[derive(Copy, Clone, Debug, Default)]
+struct Memo {
+    // A directional light's `light_dir` (which ignores the point).
+    dir: Option<Option<(DVec3, SegEnd)>>,
+    // The last view vector's bits and `normalize(l + v)` for it.
+    half: Option<([u64; 3], Option<DVec3>)>,
+}
+
 /// Shades one surface point; `lit_by_beam[l]` says a shadow beam already
 /// proved light l visible. Also returns which lights (bit l) face the
 /// point but are shadowed there, for anti-aliasing to find shadow edges.
+/// `blockers` and `memo` carry what one point leaves for the next.
 pub(crate) fn shade(
     tr: &Tracer<'_>,
     s: &Surf,
     (lit_by_beam, known): (&[bool], Option<u64>),
-    blockers: &mut [Option<f64>],
+    (blockers, memo): (&mut [Option<f64>], &mut LightMemo),
     st: &mut TileState,
 ) -> (DVec3, u64) {
     let mut c = s.color * AMBIENT;
     let mut shadowed = 0u64;
+    if memo.lights.len() < tr.lights.len() {
+        memo.lights.resize(tr.lights.len(), Memo::default());
+    }
     for (li, light) in tr.lights.iter().enumerate() {
-        let Some((l, end)) = light_dir(tr, light.kind, s.p) else {
+        let m = &mut memo.lights[li];
+        let directional = matches!(light.kind, LightKind::Directional(_));
+        let dir = if directional {
+            *m.dir.get_or_insert_with(|| light_dir(tr, light.kind, s.p))
+        } else {
+            light_dir(tr, light.kind, s.p)
+        };
+        let Some((l, end)) = dir else {
             continue;
         };
         let ndl = s.n.dot(l);
@@ -242,7 +272,20 @@ pub(crate) fn shade(
                 continue;
             }
         }
-        let h = normalize(l + s.v).unwrap_or(s.n);
+        let half = if directional {
+            let key = s.v.to_array().map(f64::to_bits);
+            match memo.lights[li].half {
+                Some((k, h)) if k == key => h,
+                _ => {
+                    let h = normalize(l + s.v);
+                    memo.lights[li].half = Some((key, h));
+                    h
+                }
+            }
+        } else {
+            normalize(l + s.v)
+        };
+        let h = half.unwrap_or(s.n);
         let spec = SPECULAR * crate::interval::powi_point(s.n.dot(h).max(0.0), SHININESS);
         c += DVec3::from_array(light.color) * (s.color * ndl + spec);
     }
@@ -378,7 +421,8 @@ mod tests {
                     grad_len: 1.0,
                 };
                 let mut st = TileState::default();
-                let (c, _) = shade(&tr, &surf, (&[true, true], None), &mut [], &mut st);
+                let memo = &mut LightMemo::default();
+                let (c, _) = shade(&tr, &surf, (&[true, true], None), (&mut [], memo), &mut st);
                 for ch in 0..3 {
                     assert!(
                         ci[ch].lo - 1e-12 <= c[ch] && c[ch] <= ci[ch].hi + 1e-12,

@@ -486,7 +486,8 @@ impl CutFaces {
             };
             let (c, shadowed, n) = *self.shaded[h.obj].get_or_insert_with(|| {
                 let s = shade::surface(tr, &tile.ray(k), &h, &mut st.stats);
-                let (c, shadowed) = shade::shade(tr, &s, (&[], None), &mut [], st);
+                let memo = &mut shade::LightMemo::default();
+                let (c, shadowed) = shade::shade(tr, &s, (&[], None), (&mut [], memo), st);
                 (c, shadowed, s.n)
             });
             lit.linear[k] = c.to_array();
@@ -520,6 +521,7 @@ fn shade_pixels(
     // Per light, where the last shadowed sample's segment met a solid
     // (see `shadow::point_segment_free`).
     let mut blockers = vec![None; nl];
+    let mut memo = shade::LightMemo::default();
     for (k, s) in surfs.iter() {
         let t0 = any_shadows.then(Instant::now);
         let (c, sh) = shade::shade(
@@ -529,7 +531,7 @@ fn shade_pixels(
                 &lit_by_beam[k * nl..(k + 1) * nl],
                 known.get(k).copied().flatten(),
             ),
-            &mut blockers,
+            (&mut blockers, &mut memo),
             ts,
         );
         shadow_ms += t0.map_or(0.0, ms_since);
@@ -646,7 +648,8 @@ mod tests {
             };
             let mut st = TileState::default();
             let s = shade::surface(&tr, &ray, &hit, &mut st.stats);
-            let (c, shadowed) = shade::shade(&tr, &s, (&[], None), &mut [], &mut st);
+            let memo = &mut shade::LightMemo::default();
+            let (c, shadowed) = shade::shade(&tr, &s, (&[], None), (&mut [], memo), &mut st);
             assert_eq!(
                 out.linear[k].map(f64::to_bits),
                 c.to_array().map(f64::to_bits)
