@@ -28,6 +28,7 @@ use std::sync::{Arc, Mutex, OnceLock, TryLockError};
 use super::TILE;
 use super::tracer::{PRUNE_MIN_OPS, PrunedEvals, TileState, Tracer};
 use crate::eval::Evaluator;
+use crate::eval::regional::Regional;
 use crate::eval::tape::Tape;
 use crate::interval::Interval;
 use crate::interval::boxes::IBox;
@@ -223,31 +224,41 @@ fn row_tapes(tr: &Tracer<'_>, gy: u32, st: &mut TileState) -> Vec<Option<TileTap
             at.push(gx as usize);
         }
     }
+    let tapes: Vec<Option<&Tape>> = (tr.evals.iter().enumerate())
+        .map(|(k, e)| {
+            tr.tapes[k]
+                .as_deref()
+                .filter(|_| tr.live_ops[k] >= PRUNE_MIN_OPS && e.as_regional().is_none())
+        })
+        .collect();
     let mut row: Vec<Option<TileTapes>> = vec![None; groups as usize];
-    if regions.is_empty() {
-        return row;
+    for (gx, pruned) in at.into_iter().zip(pruned_to_each(&tapes, &regions, st)) {
+        row[gx] = Some(pruned);
     }
-    let mut per_object: Vec<Vec<Option<Option<Tape>>>> = Vec::with_capacity(tr.evals.len());
-    for (k, e) in tr.evals.iter().enumerate() {
-        let tape = tr.tapes[k]
-            .as_deref()
-            .filter(|_| tr.live_ops[k] >= PRUNE_MIN_OPS && e.as_regional().is_none());
-        per_object.push(match tape {
-            Some(tape) => tape
-                .prune_batch(&regions, usize::MAX, &mut st.workspace)
+    row
+}
+
+// Each of `tapes` (one per object; `None`: not pruned) pruned to each of
+// `regions`, one batch per tape (`Tape::prune_batch`): a `TileTapes` per
+// region.
+fn pruned_to_each(tapes: &[Option<&Tape>], regions: &[IBox], st: &mut TileState) -> Vec<TileTapes> {
+    let mut per_object: Vec<Vec<Option<Option<Tape>>>> = tapes
+        .iter()
+        .map(|tape| match tape {
+            Some(tape) if !regions.is_empty() => tape
+                .prune_batch(regions, usize::MAX, &mut st.workspace)
                 .into_iter()
                 .map(|p| Some(p.map(|p| p.tape)))
                 .collect(),
-            None => vec![None; regions.len()],
-        });
-    }
-    for (i, (&gx, &region)) in at.iter().zip(&regions).enumerate() {
-        row[gx] = Some(TileTapes {
+            _ => vec![None; regions.len()],
+        })
+        .collect();
+    (regions.iter().enumerate())
+        .map(|(i, &region)| TileTapes {
             region,
             tapes: per_object.iter_mut().map(|o| o[i].take()).collect(),
-        });
-    }
-    row
+        })
+        .collect()
 }
 
 // The slot in its group's per-tile vectors of the tile holding pixel
@@ -292,27 +303,12 @@ fn tile_tapes(
             }
         }
     }
+    let tapes: Vec<Option<&Tape>> = (evals.iter())
+        .map(|e| e.as_regional().map(Regional::pruned_tape))
+        .collect();
     let mut tiles: Vec<Option<Arc<TileTapes>>> = vec![None; n];
-    if regions.is_empty() {
-        return tiles;
-    }
-    let mut per_object: Vec<Vec<Option<Option<Tape>>>> = Vec::with_capacity(evals.len());
-    for e in evals {
-        per_object.push(match e.as_regional() {
-            Some(r) => r
-                .pruned_tape()
-                .prune_batch(&regions, usize::MAX, &mut st.workspace)
-                .into_iter()
-                .map(|p| Some(p.map(|p| p.tape)))
-                .collect(),
-            None => vec![None; regions.len()],
-        });
-    }
-    for (i, (&slot, &region)) in at.iter().zip(&regions).enumerate() {
-        tiles[slot] = Some(Arc::new(TileTapes {
-            region,
-            tapes: per_object.iter_mut().map(|o| o[i].take()).collect(),
-        }));
+    for (slot, pruned) in at.into_iter().zip(pruned_to_each(&tapes, &regions, st)) {
+        tiles[slot] = Some(Arc::new(pruned));
     }
     tiles
 }
