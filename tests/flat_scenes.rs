@@ -235,3 +235,45 @@ fn grid_renders_of_long_functions_keep_every_sub_sample() {
     }
     assert!(partial > 50, "only {partial} partly covered pixels");
 }
+
+/// A flat union of many discs, long enough to prune with the JIT (64
+/// discs, about 650 ops): its groups and tiles
+/// take the tapes pruned ahead of time in batches (a row of groups, a
+/// group's tiles), and still draw exactly the pixels of single rays.
+#[test]
+fn flat_tiles_take_the_tapes_pruned_ahead_for_them() {
+    let mut rng = Rng::new(5);
+    let discs: Vec<String> = (0..64)
+        .map(|_| {
+            let (a, b) = (num(rng.range(-1.2, 1.2)), num(rng.range(-1.2, 1.2)));
+            format!(
+                "sqrt((x - {a})^2 + (y - {b})^2) - {}",
+                num(rng.range(0.05, 0.2))
+            )
+        })
+        .collect();
+    let text = format!(
+        "object discs = min({});\n\
+         camera {{ eye = (0, 0, 4); target = (0, 0, 0); up = (0, 1, 0); ortho = 3.4; }}\n\
+         bounds = (-1.5, -1.5, -1.5) .. (1.5, 1.5, 1.5);\n\
+         light {{ direction = (-0.5, -1, -0.7); }}\n",
+        discs.join(", ")
+    );
+    let scene = ibeam::lang::load_scene_source("discs.ib", &text).expect("valid scene");
+    assert!(is_flat(&scene));
+    let evals = build_evaluators(&scene, EvalKind::Jit).unwrap();
+    let mut opts = RenderOptions::new(300, 260);
+    let beam = render(&scene, &evals, &opts).unwrap();
+    // 3 × 3 groups, 10 × 9 tiles: every group (one row's pruning at a
+    // time) and every tile that is not proven empty.
+    assert!(
+        beam.stats.pruned_ahead > 9,
+        "only {} regions took tapes pruned ahead",
+        beam.stats.pruned_ahead
+    );
+    opts.method = Method::Pixel;
+    let pixel = render(&scene, &evals, &opts).unwrap();
+    assert_eq!(beam.hit_mask, pixel.hit_mask);
+    assert_eq!(beam.depth_t, pixel.depth_t);
+    assert!(beam.hit_mask.iter().any(|&h| h) && !beam.hit_mask.iter().all(|&h| h));
+}

@@ -54,11 +54,16 @@ type Group = Option<(PrunedEvals, IBox, Vec<bool>, Vec<Option<Arc<TileTapes>>>)>
 pub(crate) struct TileTapes {
     /// The region the tapes are pruned to: the tile's beam region.
     pub region: IBox,
-    /// Per object: its group tape pruned to `region` (`Some(None)`: no
-    /// `min`/`max` decided there), or `None` where the group holds no
-    /// tape of the object.
-    pub tapes: Vec<Option<Option<Tape>>>,
+    /// Per object: the address of the tape pruned (a tile takes the
+    /// result only in place of pruning that very tape) and the result
+    /// (`None`: no `min`/`max` decided there); `None` where the group
+    /// holds no tape of the object.
+    pub tapes: Vec<Option<PrunedAhead>>,
 }
+
+/// The address of a tape and the tape it prunes to over a region (`None`:
+/// no `min`/`max` decided there).
+pub(crate) type PrunedAhead = (usize, Option<Tape>);
 
 /// A group's slot, filled once by the first tile that asks.
 type Slot = Arc<OnceLock<Group>>;
@@ -242,14 +247,17 @@ fn row_tapes(tr: &Tracer<'_>, gy: u32, st: &mut TileState) -> Vec<Option<TileTap
 // `regions`, one batch per tape (`Tape::prune_batch`): a `TileTapes` per
 // region.
 fn pruned_to_each(tapes: &[Option<&Tape>], regions: &[IBox], st: &mut TileState) -> Vec<TileTapes> {
-    let mut per_object: Vec<Vec<Option<Option<Tape>>>> = tapes
+    let mut per_object: Vec<Vec<Option<PrunedAhead>>> = tapes
         .iter()
         .map(|tape| match tape {
-            Some(tape) if !regions.is_empty() => tape
-                .prune_batch(regions, usize::MAX, &mut st.workspace)
-                .into_iter()
-                .map(|p| Some(p.map(|p| p.tape)))
-                .collect(),
+            Some(tape) if !regions.is_empty() => {
+                let from = std::ptr::from_ref(*tape) as usize;
+                (tape
+                    .prune_batch(regions, usize::MAX, &mut st.workspace)
+                    .into_iter())
+                .map(|p| Some((from, p.map(|p| p.tape))))
+                .collect()
+            }
             _ => vec![None; regions.len()],
         })
         .collect();

@@ -141,7 +141,10 @@ impl Tracer<'_> {
                     parent,
                     group: tree,
                     is_group: group_beam,
-                    pre: tiles.and_then(|p| Some((p.region, p.tapes.get(k)?.as_ref()?))),
+                    pre: tiles.and_then(|p| {
+                        let (from, tape) = p.tapes.get(k)?.as_ref()?;
+                        Some((p.region, *from, tape))
+                    }),
                 };
                 let tree = beam.node(self, tape, t, above, SLICE_DEPTH, st)?;
                 let n = tree.pruned_tape().len();
@@ -163,9 +166,10 @@ struct Beam<'e> {
     group: Option<&'e Regional>,
     // Whether the beam is a group's.
     is_group: bool,
-    // The tape the group pruned for the region, from the group's tape
-    // (`groups::TileTapes`; `None` inside: nothing decided there).
-    pre: Option<(IBox, &'e Option<Tape>)>,
+    // A tape pruned for the group's tile or row ahead of time
+    // (`groups::TileTapes`): the region, the address of the tape pruned,
+    // and the result (`None`: nothing decided there).
+    pre: Option<(IBox, usize, &'e Option<Tape>)>,
 }
 
 impl Beam<'_> {
@@ -215,10 +219,15 @@ impl Beam<'_> {
             ),
             _ => {
                 let source = held.map_or(tape, Regional::pruned_tape);
-                // The group's pruning of this very region from this very
-                // tape, where it made one: the same tape.
+                // The pruning of this very region from this very tape,
+                // where the group made it ahead of time: the same tape.
                 let own = match self.pre {
-                    Some((r, pre)) if r == region && std::ptr::eq(source, tape) => pre.clone(),
+                    Some((r, from, pre))
+                        if r == region && std::ptr::from_ref(source) as usize == from =>
+                    {
+                        st.stats.pruned_ahead += 1;
+                        pre.clone()
+                    }
                     _ => source.prune(region, &mut st.workspace).map(|p| p.tape),
                 };
                 let own = own.unwrap_or_else(|| source.clone());

@@ -130,6 +130,10 @@ counters! {
         pruned_ops_before: u64 => sum,
         /// Live ops of those functions after pruning, summed over tiles.
         pruned_ops_after: u64 => sum,
+        /// Regions that took tapes pruned ahead of time, in one batch with
+        /// their siblings (a flat scene's tiles and groups, see
+        /// `render::groups`), rather than pruning their own.
+        pruned_ahead: u64 => sum,
     }
     "shadows" {
         /// Per-pixel shadow segments tested.
@@ -247,7 +251,7 @@ mod tests {
         };
         let json = st.to_json();
         let obj = json.as_object().unwrap();
-        assert_eq!(obj.len(), 32);
+        assert_eq!(obj.len(), 33);
         assert!(obj.get("aa_samples").is_none());
         assert_eq!(json["aa_samples_mean"], 2.5);
         assert_eq!(json["rays"], 3);
