@@ -237,9 +237,9 @@ fn grid_renders_of_long_functions_keep_every_sub_sample() {
 }
 
 /// A flat union of many discs, long enough to prune with the JIT (64
-/// discs, about 650 ops): its groups and tiles
-/// take the tapes pruned ahead of time in batches (a row of groups, a
-/// group's tiles), and still draw exactly the pixels of single rays.
+/// discs, about 650 ops): its tiles take the tapes their groups pruned
+/// for them in batches, and still draw exactly the pixels of single
+/// rays.
 #[test]
 fn flat_tiles_take_the_tapes_pruned_ahead_for_them() {
     let mut rng = Rng::new(5);
@@ -264,11 +264,10 @@ fn flat_tiles_take_the_tapes_pruned_ahead_for_them() {
     let evals = build_evaluators(&scene, EvalKind::Jit).unwrap();
     let mut opts = RenderOptions::new(300, 260);
     let beam = render(&scene, &evals, &opts).unwrap();
-    // 3 × 3 groups, 10 × 9 tiles: every group (one row's pruning at a
-    // time) and every tile that is not proven empty.
+    // 10 × 9 tiles: every tile that is not proven empty.
     assert!(
         beam.stats.pruned_ahead > 9,
-        "only {} regions took tapes pruned ahead",
+        "only {} tiles took tapes pruned ahead",
         beam.stats.pruned_ahead
     );
     opts.method = Method::Pixel;

@@ -225,7 +225,10 @@ impl Beam<'_> {
                     Some((r, from, pre))
                         if r == region && std::ptr::from_ref(source) as usize == from =>
                     {
-                        st.stats.pruned_ahead += 1;
+                        // Only tiles count: whether a group takes its
+                        // row's tapes depends on which thread pruned the
+                        // row first, and counters must not.
+                        st.stats.pruned_ahead += u64::from(!self.is_group);
                         pre.clone()
                     }
                     _ => source.prune(region, &mut st.workspace).map(|p| p.tape),

@@ -130,9 +130,9 @@ counters! {
         pruned_ops_before: u64 => sum,
         /// Live ops of those functions after pruning, summed over tiles.
         pruned_ops_after: u64 => sum,
-        /// Regions that took tapes pruned ahead of time, in one batch with
-        /// their siblings (a flat scene's tiles and groups, see
-        /// `render::groups`), rather than pruning their own.
+        /// Tiles that took tapes their group pruned ahead of time, in one
+        /// batch with their siblings (flat scenes, see `render::groups`),
+        /// rather than pruning their own.
         pruned_ahead: u64 => sum,
     }
     "shadows" {
