@@ -150,15 +150,27 @@ pub(crate) fn trace_tile(tr: &Tracer<'_>, tile: &mut TileRays, h: u32, st: &mut 
     };
     let live: Vec<u32> = (0..tr.evals.len() as u32).collect();
     // A tile reaches here only where its group, or its own interval,
-    // did not prove it empty: its quarters are tested at once, not the
-    // whole tile first, which would seldom decide it (a tile wholly
-    // inside a solid: its quarters say the same).
+    // did not prove it empty: it is not tested as a whole, which would
+    // seldom decide it (a tile wholly inside a solid: its parts say the
+    // same). Where its quarters are small, they are not tested either:
+    // `small` tests their quarters first, all in one batch (prospero at
+    // 1024², one thread: tracing 55.8 → 53.9 ms, the same images).
     let whole = tile.whole();
     let top: Vec<Rect> = if whole.pixel_count() > SMALL_PIXELS {
         whole.quarters_by_column().collect()
     } else {
         vec![whole]
     };
+    if top.iter().all(|q| q.pixel_count() <= SMALL_PIXELS) {
+        let untested: Vec<(Rect, bool)> = (top.into_iter())
+            .filter(|&q| plane.may_meet_bounds(q))
+            .map(|q| (q, false))
+            .collect();
+        if !untested.is_empty() {
+            small(tr, tile, &plane, &untested, &live, st);
+        }
+        return;
+    }
     level(tr, tile, &plane, &top, &live, st);
 }
 
@@ -237,7 +249,8 @@ fn level(
 }
 
 // Rectangles of at most `SMALL_PIXELS` pixels that their intervals did
-// not reject, or proven negative (`(rectangle, negative)`): the others'
+// not reject (or that were not tested), or proven negative
+// (`(rectangle, negative)`): the others'
 // quarters, theirs and so on down to single pixels are tested level by
 // level, each level of all of them in one interval batch per object, on
 // the functions `tr` holds (pruning again would cost more than it saves
