@@ -26,6 +26,7 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock, TryLockError};
 
 use super::TILE;
+use super::camera::CornerRays;
 use super::tracer::{PRUNE_MIN_OPS, PrunedEvals, TileState, Tracer};
 use crate::eval::Evaluator;
 use crate::eval::regional::Regional;
@@ -190,9 +191,10 @@ fn build(
     let t = beam_range(tr, xs, ys)?;
     let region = tr.beam_region(xs, ys, t)?;
     let evals = tr.pruned_group(xs, ys, t, pre, st)?;
-    let empty = empty_tiles(tr, &evals.0, (x0, y0), (x1, y1), st);
+    let beams = tile_beams(tr, (x0, y0), (x1, y1));
+    let empty = empty_tiles(&evals.0, &beams, st);
     let tiles = if tr.flat {
-        tile_tapes(tr, &evals.0, (x0, y0), (x1, y1), &empty, st)
+        tile_tapes(tr, &evals.0, &beams, &empty, st)
     } else {
         Vec::new()
     };
@@ -275,42 +277,23 @@ fn tile_slot(x: u32, y: u32) -> usize {
     ((y % GROUP_SIDE) / TILE * GROUP_TILES + (x % GROUP_SIDE) / TILE) as usize
 }
 
-// Per tile of the group whose pixels span `x0..x1 × y0..y1` (as in
-// `empty_tiles`): the group's tapes `evals` pruned to the tile's beam
-// region, for the tiles that are not proven `empty` and whose rays meet
-// the bounds; the region is the one `Tracer::pruned_to_beam` prunes a
+// Per tile of a group (slot as in `empty_tiles`): the group's tapes
+// `evals` pruned to the tile's beam region, for the tiles of `beams` not
+// proven `empty`; the region is the one `Tracer::pruned_to_beam` prunes a
 // flat tile with no pixel rays to, and a tile whose region differs
 // prunes on its own.
 fn tile_tapes(
     tr: &Tracer<'_>,
     evals: &[Arc<dyn Evaluator>],
-    (x0, y0): (u32, u32),
-    (x1, y1): (u32, u32),
+    beams: &[TileBeam],
     empty: &[bool],
     st: &mut TileState,
 ) -> Vec<Option<Arc<TileTapes>>> {
     let n = (GROUP_TILES * GROUP_TILES) as usize;
-    let mut regions = Vec::with_capacity(n);
-    let mut at = Vec::with_capacity(n);
-    for ty in 0..GROUP_TILES {
-        for tx in 0..GROUP_TILES {
-            let (tx0, ty0) = (x0 + tx * TILE, y0 + ty * TILE);
-            let slot = (ty * GROUP_TILES + tx) as usize;
-            if tx0 >= x1 || ty0 >= y1 || empty[slot] {
-                continue;
-            }
-            let xs = (f64::from(tx0) + 0.5, f64::from((tx0 + TILE).min(x1)) - 0.5);
-            let ys = (f64::from(ty0) + 0.5, f64::from((ty0 + TILE).min(y1)) - 0.5);
-            let corners = tr.cam.corners(xs, ys);
-            if let Some(region) = corners
-                .slab_range(&tr.bounds)
-                .and_then(|t| tr.corner_region(&corners, t))
-            {
-                regions.push(region);
-                at.push(slot);
-            }
-        }
-    }
+    let (at, regions): (Vec<usize>, Vec<IBox>) = (beams.iter())
+        .filter(|&&(slot, ..)| !empty[slot])
+        .filter_map(|(slot, corners, t)| Some((*slot, tr.corner_region(corners, *t)?)))
+        .unzip();
     let tapes: Vec<Option<&Tape>> = (evals.iter())
         .map(|e| e.as_regional().map(Regional::pruned_tape))
         .collect();
@@ -321,12 +304,11 @@ fn tile_tapes(
     tiles
 }
 
-// Per tile of the group whose pixels span `x0..x1 × y0..y1` (row-major,
-// `GROUP_TILES` a row; tiles past the image's edge, and tiles whose rays
-// all miss the bounds, stay false): whether the
-// group's evaluators `evals` prove every object positive or undefined
-// over the tile's beam over `CornerRays::slab_range`, which holds every
-// pixel's slab range. Every box the tile's tracing would evaluate lies in
+// Per tile of a group (row-major, `GROUP_TILES` a row; tiles not in
+// `beams`, past the image's edge or with every ray missing the bounds,
+// stay false): whether the group's evaluators `evals` prove every object
+// positive or undefined over the tile's beam over its range in `beams`,
+// which holds every pixel's slab range. Every box the tile's tracing would evaluate lies in
 // that hull, and interval arithmetic is inclusion-isotone (a tape pruned
 // to a region answers inside it within the whole function's interval),
 // so the tile would settle every pixel as background: `tile` skips it
@@ -334,32 +316,11 @@ fn tile_tapes(
 // group's tiles: a megapixel's 1024 tiles cost about what 64 single
 // tapes' passes do, where pruning each empty tile cost a pass over its
 // group's tape, and its rays and shading a pass over its pixels.
-fn empty_tiles(
-    tr: &Tracer<'_>,
-    evals: &[Arc<dyn Evaluator>],
-    (x0, y0): (u32, u32),
-    (x1, y1): (u32, u32),
-    st: &mut TileState,
-) -> Vec<bool> {
+fn empty_tiles(evals: &[Arc<dyn Evaluator>], beams: &[TileBeam], st: &mut TileState) -> Vec<bool> {
     let n = (GROUP_TILES * GROUP_TILES) as usize;
-    let mut boxes = Vec::with_capacity(n);
-    let mut at = Vec::with_capacity(n);
-    for ty in 0..GROUP_TILES {
-        for tx in 0..GROUP_TILES {
-            let (tx0, ty0) = (x0 + tx * TILE, y0 + ty * TILE);
-            if tx0 >= x1 || ty0 >= y1 {
-                continue;
-            }
-            let xs = (f64::from(tx0) + 0.5, f64::from((tx0 + TILE).min(x1)) - 0.5);
-            let ys = (f64::from(ty0) + 0.5, f64::from((ty0 + TILE).min(y1)) - 0.5);
-            let corners = tr.cam.corners(xs, ys);
-            // A tile whose rays all miss the bounds is left to the tracer.
-            if let Some(t) = corners.slab_range(&tr.bounds) {
-                boxes.push(corners.hull(t));
-                at.push((ty * GROUP_TILES + tx) as usize);
-            }
-        }
-    }
+    let (at, boxes): (Vec<usize>, Vec<IBox>) = (beams.iter())
+        .map(|(slot, corners, t)| (*slot, corners.hull(*t)))
+        .unzip();
     let mut empty = vec![false; n];
     if boxes.is_empty() {
         return empty;
@@ -386,6 +347,34 @@ fn empty_tiles(
         empty[i] = c;
     }
     empty
+}
+
+/// A tile's slot in its group, the corner rays of its beam, and the range
+/// of the ray parameter its pixels' slabs lie in (see [`tile_beams`]).
+type TileBeam = (usize, CornerRays, Interval);
+
+// Per tile of the group whose pixels span `x0..x1 × y0..y1` whose rays
+// meet the bounds (a tile whose rays all miss them is left to the
+// tracer): its slot (row-major, `GROUP_TILES` a row), the corner rays of
+// its beam, and `CornerRays::slab_range` of them, which holds every
+// pixel's slab range.
+fn tile_beams(tr: &Tracer<'_>, (x0, y0): (u32, u32), (x1, y1): (u32, u32)) -> Vec<TileBeam> {
+    let mut beams = Vec::with_capacity((GROUP_TILES * GROUP_TILES) as usize);
+    for ty in 0..GROUP_TILES {
+        for tx in 0..GROUP_TILES {
+            let (tx0, ty0) = (x0 + tx * TILE, y0 + ty * TILE);
+            if tx0 >= x1 || ty0 >= y1 {
+                continue;
+            }
+            let xs = (f64::from(tx0) + 0.5, f64::from((tx0 + TILE).min(x1)) - 0.5);
+            let ys = (f64::from(ty0) + 0.5, f64::from((ty0 + TILE).min(y1)) - 0.5);
+            let corners = tr.cam.corners(xs, ys);
+            if let Some(t) = corners.slab_range(&tr.bounds) {
+                beams.push(((ty * GROUP_TILES + tx) as usize, corners, t));
+            }
+        }
+    }
+    beams
 }
 
 // `CornerRays::slab_range` of the beam through the pixel centres
