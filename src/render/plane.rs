@@ -52,7 +52,7 @@ use crate::interval::Interval;
 use crate::interval::boxes::{IBox, ray_box};
 
 /// Rectangles of at most this many pixels are finished without pruning
-/// (`small`): a 32-pixel tile's quarters. Pruning them too, four in one
+/// (`small`): a 32×32 tile's quarters. Pruning them too, four in one
 /// pass over the tile's tape, cost more than their shorter tapes saved
 /// (prospero at 1024², one thread: 53.3 against 54.8 ms of tracing, the
 /// same images), as pruning 8×8 blocks did before (63 ms).
