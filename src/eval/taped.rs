@@ -17,6 +17,19 @@ use crate::ir::Function;
 /// (registers × inputs values) stay in cache whatever the caller's batch.
 const CHUNK: usize = 256;
 
+/// Calls `f` on each run of at most [`CHUNK`] points: the coordinate
+/// columns' slices and the matching slice of `out`.
+fn by_chunks<T>(
+    [xs, ys, zs]: [&[f64]; 3],
+    out: &mut [T],
+    mut f: impl FnMut([&[f64]; 3], &mut [T]),
+) {
+    for (i, out) in out.chunks_mut(CHUNK).enumerate() {
+        let r = i * CHUNK..i * CHUNK + out.len();
+        f([&xs[r.clone()], &ys[r.clone()], &zs[r]], out);
+    }
+}
+
 /// A [`Tape`] as an [`Evaluator`].
 pub struct TapeEvaluator {
     tape: Tape,
@@ -66,21 +79,17 @@ impl Evaluator for TapeEvaluator {
 
     fn point_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
         with_workspace(|ws| {
-            for (i, out) in out.chunks_mut(CHUNK).enumerate() {
-                let r = i * CHUNK..i * CHUNK + out.len();
-                let cols = [&xs[r.clone()], &ys[r.clone()], &zs[r]];
-                self.tape.point_batch(cols, out, ws);
-            }
+            by_chunks([xs, ys, zs], out, |cols, out| {
+                self.tape.point_batch(cols, out, ws)
+            })
         })
     }
 
     fn point_grad_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [Grad]) {
         with_workspace(|ws| {
-            for (i, out) in out.chunks_mut(CHUNK).enumerate() {
-                let r = i * CHUNK..i * CHUNK + out.len();
-                let cols = [&xs[r.clone()], &ys[r.clone()], &zs[r]];
-                self.tape.point_grad_batch(cols, out, ws);
-            }
+            by_chunks([xs, ys, zs], out, |cols, out| {
+                self.tape.point_grad_batch(cols, out, ws)
+            })
         })
     }
 

@@ -274,11 +274,11 @@ pub(crate) fn shade(
         }
         let half = if directional {
             let key = s.v.to_array().map(f64::to_bits);
-            match memo.lights[li].half {
+            match m.half {
                 Some((k, h)) if k == key => h,
                 _ => {
                     let h = normalize(l + s.v);
-                    memo.lights[li].half = Some((key, h));
+                    m.half = Some((key, h));
                     h
                 }
             }
