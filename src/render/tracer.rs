@@ -249,8 +249,14 @@ impl<'a> Tracer<'a> {
                 .iter()
                 .copied()
                 .filter(|&c| c > t0 && c < t1);
-            let ends: Vec<f64> = std::iter::once(t0).chain(inner).chain([t1]).collect();
-            return ends.windows(2).rev().map(|w| (w[0], w[1])).collect();
+            let mut pieces = Vec::with_capacity(self.slice_ends.len() + 1);
+            let mut last = t0;
+            for end in inner.chain([t1]) {
+                pieces.push((last, end));
+                last = end;
+            }
+            pieces.reverse();
+            return pieces;
         }
         super::probe::equal_pieces(t0, t1, self.equal_pieces(t0, t1))
     }
@@ -272,30 +278,46 @@ impl<'a> Tracer<'a> {
     /// [`Tracer::first_pieces`], with `[t0, near]` a piece of its own,
     /// taken first, when `t0 < near < t1` (see `probe::Floor`).
     pub(crate) fn first_pieces_near(&self, t0: f64, near: f64, t1: f64) -> Vec<(f64, f64)> {
-        if t0 < near && near < t1 {
-            // Behind the first piece, pieces twice as deep as the one before
-            // (cut again at the slices' ends).
-            let mut ends = vec![t0];
-            let mut w = near - t0;
-            let mut e = near;
-            while e < t1 {
-                ends.push(e);
-                w *= 2.0;
-                e += w;
-            }
-            ends.extend(
-                self.slice_ends
-                    .iter()
-                    .copied()
-                    .filter(|&c| c > t0 && c < t1),
-            );
-            ends.sort_by(f64::total_cmp);
-            ends.dedup();
-            ends.push(t1);
-            ends.windows(2).rev().map(|w| (w[0], w[1])).collect()
-        } else {
-            self.first_pieces(t0, t1)
+        if !(t0 < near && near < t1) {
+            return self.first_pieces(t0, t1);
         }
+        // Behind the first piece, pieces twice as deep as the one before,
+        // cut again at the slices' ends: the two ascending sequences of
+        // ends merged (this runs for every block and ray).
+        let mut slices = self
+            .slice_ends
+            .iter()
+            .copied()
+            .filter(|&c| c > t0 && c < t1)
+            .peekable();
+        let mut pieces = Vec::with_capacity(8 + self.slice_ends.len());
+        let (mut last, mut w, mut e) = (t0, near - t0, near);
+        loop {
+            let doubling = (e < t1).then_some(e);
+            let end = match (doubling, slices.peek().copied()) {
+                (Some(d), Some(s)) if s < d => {
+                    slices.next();
+                    s
+                }
+                (Some(d), _) => {
+                    w *= 2.0;
+                    e += w;
+                    d
+                }
+                (None, Some(s)) => {
+                    slices.next();
+                    s
+                }
+                (None, None) => break,
+            };
+            if end != last {
+                pieces.push((last, end));
+                last = end;
+            }
+        }
+        pieces.push((last, t1));
+        pieces.reverse();
+        pieces
     }
 
     /// Whether the scene is flat, and [`Tracer::first_pieces_near`], for
@@ -765,6 +787,44 @@ mod tests {
             tr.first_pieces_near(1.0, 12.0, 10.0),
             tr.first_pieces(1.0, 10.0)
         );
+    }
+
+    // The merge of the doubling ends with the slices' ends gives what
+    // sorting both lists together would, equal ends once.
+    #[test]
+    fn pieces_near_a_candidate_merge_like_a_sort() {
+        let mut tr = Tracer::for_tests(&crate::scene::Camera::default(), 64);
+        let mut rng = crate::ir::random::Rng::new(7);
+        for case in 0..2000 {
+            let t0 = rng.unit() * 4.0;
+            let near = t0 + rng.unit() * 2.0;
+            let t1 = t0 + rng.unit() * 20.0;
+            // Some slice ends fall exactly on doubling ends.
+            let mut ends: Vec<f64> = (0..(case % 6)).map(|_| t0 + rng.unit() * 20.0).collect();
+            if case % 3 == 0 {
+                ends.push(near + 2.0 * (near - t0));
+            }
+            ends.sort_by(f64::total_cmp);
+            tr.slice_ends = ends.clone().into();
+            let got = tr.first_pieces_near(t0, near, t1);
+            if !(t0 < near && near < t1) {
+                assert_eq!(got, tr.first_pieces(t0, t1));
+                continue;
+            }
+            let mut cuts = vec![t0];
+            let (mut w, mut e) = (near - t0, near);
+            while e < t1 {
+                cuts.push(e);
+                w *= 2.0;
+                e += w;
+            }
+            cuts.extend(ends.iter().copied().filter(|&c| c > t0 && c < t1));
+            cuts.sort_by(f64::total_cmp);
+            cuts.dedup();
+            cuts.push(t1);
+            let want: Vec<(f64, f64)> = cuts.windows(2).rev().map(|w| (w[0], w[1])).collect();
+            assert_eq!(got, want, "t0 {t0} near {near} t1 {t1} ends {ends:?}");
+        }
     }
 
     #[test]
