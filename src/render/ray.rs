@@ -191,12 +191,11 @@ fn sweep_ray(
         {
             return Some(narrow_hit(tr, ray, live, a, b, stt));
         }
-        // The sub-pieces to sweep next, nearest last.
-        let mut sub = Vec::with_capacity(2);
-        let halves = |na: f64, nb: f64, sub: &mut Vec<(f64, f64)>| {
+        // The sub-pieces to sweep next go on the stack, nearest last.
+        let halves = |na: f64, nb: f64, stack: &mut Vec<(f64, f64)>| {
             let m = 0.5 * (na + nb);
-            sub.push((m, nb));
-            sub.push((na, m));
+            stack.push((m, nb));
+            stack.push((na, m));
         };
         if let [(k, c)] = forms[..] {
             match newton(tr, ray, k as usize, (a, b), c, stt) {
@@ -209,13 +208,12 @@ fn sweep_ray(
                     // precision: treat as a narrow piece.
                     return Some(narrow_hit(tr, ray, live, na, nb, stt));
                 }
-                Newton::Shrunk(na, nb) if nb - na < 0.5 * (b - a) => sub.push((na, nb)),
-                Newton::Shrunk(na, nb) => halves(na, nb, &mut sub),
+                Newton::Shrunk(na, nb) if nb - na < 0.5 * (b - a) => stack.push((na, nb)),
+                Newton::Shrunk(na, nb) => halves(na, nb, &mut stack),
             }
         } else {
-            halves(a, b, &mut sub);
+            halves(a, b, &mut stack);
         }
-        stack.extend(sub);
     }
     None
 }

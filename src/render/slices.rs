@@ -146,7 +146,7 @@ impl Tracer<'_> {
                         Some((p.region, *from, tape))
                     }),
                 };
-                let tree = beam.node(self, tape, t, above, SLICE_DEPTH, st)?;
+                let tree = beam.node(self, tape, t, above, SLICE_DEPTH, None, st)?;
                 let n = tree.pruned_tape().len();
                 Some((Arc::new(tree) as Arc<dyn Evaluator>, n))
             }
@@ -186,6 +186,10 @@ impl Beam<'_> {
     // 13.5k ops), and the pass cost as much as evaluating it. It shares
     // the group's tape and lets the group answer; its short slices prune
     // from the group's slices.
+    //
+    // `ahead` is this region's pruning from `tape`, made with its
+    // sibling's in one pass (see `Beam::halves_ahead`).
+    #[allow(clippy::too_many_arguments)]
     fn node(
         &self,
         tr: &Tracer<'_>,
@@ -193,18 +197,10 @@ impl Beam<'_> {
         t: Interval,
         above: (&Arc<dyn Evaluator>, usize),
         depth: u32,
+        ahead: Option<Option<Tape>>,
         st: &mut TileState,
     ) -> Option<Regional> {
-        // A group's regions reach a little further along the rays: its
-        // tiles' slices, whose ranges come from their own pixels, then
-        // fit inside them despite rounding.
-        let reach = if self.is_group { group_reach(t) } else { t };
-        let region = tr.corner_region(&self.corners, reach)?;
-        let held = self
-            .group
-            .filter(|g| box_within(&region, &g.region()))
-            .map(|g| g.smallest_holding(&region))
-            .filter(|h| h.pruned_tape().len() <= tape.len());
+        let (region, held) = self.region(tr, tape, t)?;
         let above = match held {
             Some(h) if h.answer_len() < above.1 => (h.answer(), h.answer_len()),
             _ => above,
@@ -221,8 +217,8 @@ impl Beam<'_> {
                 let source = held.map_or(tape, Regional::pruned_tape);
                 // The pruning of this very region from this very tape,
                 // where the group made it ahead of time: the same tape.
-                let own = match self.pre {
-                    Some((r, from, pre))
+                let own = match (self.pre, ahead) {
+                    (Some((r, from, pre)), _)
                         if r == region && std::ptr::from_ref(source) as usize == from =>
                     {
                         // Only tiles count: whether a group takes its
@@ -231,6 +227,8 @@ impl Beam<'_> {
                         st.stats.pruned_ahead += u64::from(!self.is_group);
                         pre.clone()
                     }
+                    // Pruned from `tape` itself (nothing held it).
+                    (_, Some(own)) if held.is_none() => own,
                     _ => source.prune(region, &mut st.workspace).map(|p| p.tape),
                 };
                 let own = own.unwrap_or_else(|| source.clone());
@@ -251,14 +249,61 @@ impl Beam<'_> {
         }
         let below = (Arc::clone(node.answer()), node.answer_len());
         let m = t.mid();
-        let children = [Interval::new(t.lo, m), Interval::new(m, t.hi)]
+        let halves = [Interval::new(t.lo, m), Interval::new(m, t.hi)];
+        let tape = node.pruned_tape();
+        let ahead = self.halves_ahead(tr, tape, halves, st);
+        let children = halves
             .into_iter()
-            .filter_map(|half| {
-                let tape = node.pruned_tape();
-                self.node(tr, tape, half, (&below.0, below.1), depth - 1, st)
+            .zip(ahead)
+            .filter_map(|(half, ahead)| {
+                self.node(tr, tape, half, (&below.0, below.1), depth - 1, ahead, st)
             })
             .collect();
         Some(node.with_children(children))
+    }
+
+    // The region of the beam over `t` and the smallest region of the
+    // group's tree that holds it, if its tape is no longer than `tape`.
+    fn region(
+        &self,
+        tr: &Tracer<'_>,
+        tape: &Tape,
+        t: Interval,
+    ) -> Option<(IBox, Option<&Regional>)> {
+        // A group's regions reach a little further along the rays: its
+        // tiles' slices, whose ranges come from their own pixels, then
+        // fit inside them despite rounding.
+        let reach = if self.is_group { group_reach(t) } else { t };
+        let region = tr.corner_region(&self.corners, reach)?;
+        let held = self
+            .group
+            .filter(|g| box_within(&region, &g.region()))
+            .map(|g| g.smallest_holding(&region))
+            .filter(|h| h.pruned_tape().len() <= tape.len());
+        Some((region, held))
+    }
+
+    // Both halves' prunings from `tape`, made in one pass over it (see
+    // `Tape::prune_batch`), when both would prune from it (no region of
+    // the group's tree holds either): on 1000 spheres a region's two
+    // halves were pruned one after the other from the same tape, each
+    // pass dispatching every op again.
+    fn halves_ahead(
+        &self,
+        tr: &Tracer<'_>,
+        tape: &Tape,
+        halves: [Interval; 2],
+        st: &mut TileState,
+    ) -> [Option<Option<Tape>>; 2] {
+        let regions = halves.map(|h| self.region(tr, tape, h));
+        let [Some((r0, None)), Some((r1, None))] = regions else {
+            return [None, None];
+        };
+        let mut pruned = tape
+            .prune_batch(&[r0, r1], usize::MAX, &mut st.workspace)
+            .into_iter()
+            .map(|p| Some(p.map(|p| p.tape)));
+        [pruned.next().flatten(), pruned.next().flatten()]
     }
 
     // Whether the beam over `t` is deeper than `LONG_ASPECT` times its
