@@ -168,8 +168,9 @@ fn block(
         // short evaluations, keep the clip start and the pixel method's
         // exact mask.
         // IAA's sub-samples start at the floor too (their masks are
-        // compared with no other method's), and sweep the block's first
-        // candidate piece first (see `probe::Floor`).
+        // compared with no other method's). Both sweep the block's first
+        // candidate piece first (see `probe::Floor` and
+        // `Tracer::ray_pieces`).
         let start = if (tr.large || tr.sub_samples)
             && t_floor > pt0
             && scene_point(tr, live, ray.at(t_floor), &mut st.stats).0 > 0.0
@@ -178,7 +179,7 @@ fn block(
         } else {
             pt0
         };
-        let near = if tr.sub_samples {
+        let near = if tr.large || tr.sub_samples {
             floor.near_from(start)
         } else {
             start

@@ -107,7 +107,7 @@ pub(crate) fn trace_ray_near_first(
     if let Some(h) = starts_inside(tr, ray, live, t0, &mut st.stats) {
         return Some(h);
     }
-    let pieces = tr.first_pieces_near(t0, near, t1);
+    let pieces = tr.ray_pieces(t0, near, t1);
     let mut steps = 0usize;
     sweep_ray(tr, ray, pieces, live, (&mut steps, f64::INFINITY), st)
 }
