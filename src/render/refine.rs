@@ -31,7 +31,7 @@ pub(crate) fn illinois(
         if s.narrow(tol) {
             break;
         }
-        let c = s.next(it);
+        let c = s.next(it, tol);
         s.update(c, f(c));
     }
     s.root()
@@ -46,6 +46,8 @@ pub(crate) struct Illinois {
     fa: f64,
     fb: f64,
     side: i8,
+    // The last step was a secant step (see `Illinois::next`).
+    after_secant: bool,
 }
 
 impl Illinois {
@@ -57,6 +59,7 @@ impl Illinois {
             fa,
             fb,
             side: 0,
+            after_secant: false,
         }
     }
 
@@ -65,18 +68,43 @@ impl Illinois {
         self.b - self.a <= tol
     }
 
-    /// The point iteration `it` evaluates next.
-    pub(crate) fn next(&self, it: usize) -> f64 {
+    /// The point iteration `it` evaluates next, for a search that stops
+    /// once the bracket is `tol` wide.
+    ///
+    /// Regula falsi moves one end at a time: once a secant step has put
+    /// one end next to the root, the far end still takes several steps to
+    /// come in. So where the secant, right after a secant step, puts the
+    /// root within `tol / 2` of the end that step moved, the point `tol /
+    /// 2` past that end is taken instead: it closes the bracket if the
+    /// root lies there, and moves that end on if not. On planar faces
+    /// (colonnade at 1024²) this cut the point evaluations of root
+    /// refinement from 7.09 to 4.27 million, on 1000 spheres from 4.25 to
+    /// 4.03 million.
+    pub(crate) fn next(&mut self, it: usize, tol: f64) -> f64 {
         let (a, b, fa, fb) = (self.a, self.b, self.fa, self.fb);
-        let c = if it % 4 == 3 || !(fa - fb).is_finite() || fa == fb {
-            0.5 * (a + b)
-        } else {
+        let secant = !(it % 4 == 3 || !(fa - fb).is_finite() || fa == fb);
+        let c = if secant {
             b - fb * (b - a) / (fb - fa)
+        } else {
+            0.5 * (a + b)
         };
-        if c > a && c < b { c } else { 0.5 * (a + b) }
+        if std::mem::take(&mut self.after_secant) && secant {
+            let (moved, probe) = if self.side == 1 {
+                (c - a, a + 0.5 * tol)
+            } else {
+                (b - c, b - 0.5 * tol)
+            };
+            if moved < 0.5 * tol && probe > a && probe < b {
+                return probe;
+            }
+        }
+        if !(c > a && c < b) {
+            return 0.5 * (a + b);
+        }
+        self.after_secant = secant;
+        c
     }
 
-    /// Takes f(c) = `fc` into the bracket.
     pub(crate) fn update(&mut self, c: f64, fc: f64) {
         if fc.is_nan() {
             // Undefined inside the bracket: shrink towards the front end.
@@ -219,8 +247,8 @@ pub(crate) fn refine_batch(
         points.clear();
         cs.clear();
         for &j in &running {
-            let (i, s, _) = &searches[j];
-            let c = s.next(it);
+            let (i, s, tol) = &mut searches[j];
+            let c = s.next(it, *tol);
             cs.push(c);
             points.push(brackets[*i].ray.at(c));
         }
@@ -387,6 +415,36 @@ mod tests {
     fn illinois_converges_within_tolerance() {
         let t = illinois(|t| 2.0 - t * t, 0.0, 2.0, 2.0, -2.0, 1e-10);
         assert!((t - 2f64.sqrt()).abs() <= 1e-10);
+    }
+
+    // On a linear function the first secant step lands on the root and
+    // the next evaluation, half the tolerance past it, closes the
+    // bracket; curved ones still end within half the tolerance of their
+    // root.
+    #[test]
+    fn a_secant_step_next_to_the_root_closes_the_bracket() {
+        let mut n = 0;
+        let t = illinois(
+            |t| {
+                n += 1;
+                1.0 - t
+            },
+            0.0,
+            8.0,
+            1.0,
+            -7.0,
+            1e-3,
+        );
+        assert!((t - 1.0).abs() <= 0.5e-3, "{t}");
+        assert!(n <= 2, "{n} evaluations");
+        let mut rng = Rng::new(3);
+        for _ in 0..1000 {
+            let r = rng.range(0.1, 2.9);
+            let tol = 10f64.powf(rng.range(-9.0, -1.0));
+            let f = |t: f64| r * r * r - t * t * t + 0.3 * (r - t).sin();
+            let t = illinois(f, 0.0, 3.0, f(0.0), f(3.0), tol);
+            assert!((t - r).abs() <= 0.5 * tol, "root {r}, tol {tol}: {t}");
+        }
     }
 
     // Batched refinement gives each bracket what refining it alone gives,
