@@ -489,7 +489,9 @@ fn include_block(
 ) {
     // (pixel, its clip range, index of its bracket if it has one)
     let mut pixels: Vec<(usize, (f64, f64), Option<usize>)> = Vec::new();
-    let mut brackets = Vec::new();
+    let mut scratch = std::mem::take(&mut st.refine);
+    let brackets = &mut scratch.brackets;
+    brackets.clear();
     for (i, j) in b.pixels() {
         let k = tile.idx(i, j);
         tile.class[k] = Class::Included;
@@ -512,7 +514,8 @@ fn include_block(
         });
         pixels.push((k, (pt0, pt1), bracket));
     }
-    let hits = refine_batch(tr, &brackets, live, &mut st.stats);
+    let hits = refine_batch(tr, &mut scratch, live, &mut st.stats);
+    st.refine = scratch;
     for (k, (pt0, pt1), bracket) in pixels {
         tile.hits[k] = match bracket.and_then(|i| hits[i]) {
             Some(h) if h.t >= pt0 && h.t <= pt1 => Some(h),

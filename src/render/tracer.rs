@@ -150,6 +150,8 @@ pub(crate) struct TileState {
     pub workspace: Workspace,
     /// The tile's octree cells, for shadow segments (see `render::cells`).
     pub cells: CellTapes,
+    /// Buffers of batched root refinement.
+    pub refine: super::refine::RefineScratch,
 }
 
 impl<'a> Tracer<'a> {
@@ -454,24 +456,22 @@ impl<'a> Tracer<'a> {
     }
 
     /// [`Tracer::point_grad`] of object `k` at each of `points`, in one
-    /// batch (the same bits).
+    /// batch (the same bits), into `out` (as long as `points`); `cols`
+    /// holds the coordinate columns.
     pub(crate) fn point_grads(
         &self,
         k: usize,
         points: &[[f64; 3]],
+        cols: &mut [Vec<f64>; 3],
+        out: &mut [Grad],
         st: &mut RenderStats,
-    ) -> Vec<Grad> {
+    ) {
         st.point_evals += points.len() as u64;
-        let cols: [Vec<f64>; 3] = std::array::from_fn(|c| points.iter().map(|p| p[c]).collect());
-        let mut out = vec![
-            Grad {
-                v: 0.0,
-                d: [0.0; 3]
-            };
-            points.len()
-        ];
-        self.evals[k].point_grad_batch(&cols[0], &cols[1], &cols[2], &mut out);
-        out
+        for (c, col) in cols.iter_mut().enumerate() {
+            col.clear();
+            col.extend(points.iter().map(|p| p[c]));
+        }
+        self.evals[k].point_grad_batch(&cols[0], &cols[1], &cols[2], out);
     }
 
     /// The scene's evaluators pruned to the box of `ray` over `t` (see
