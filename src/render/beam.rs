@@ -188,17 +188,15 @@ fn block(
         tile.class[k] = Class::Ray;
         return;
     }
-    // Screen extents of the pixel centres, and the beam's corner rays,
-    // which both tests below read.
-    let xs = ((b.x0 + tile.x0) as f64 + 0.5, (b.x1 + tile.x0) as f64 - 0.5);
-    let ys = ((b.y0 + tile.y0) as f64 + 0.5, (b.y1 + tile.y0) as f64 - 0.5);
+    // The beam's corner rays (the camera's, to the bit), which both tests
+    // below read.
     let corners = tile.grid.corners((b.x0, b.y0), (b.x1, b.y1));
     if t_floor <= t0 && all_start_inside(tr, tile, b, &corners, live, &mut st.stats) {
         st.stats.blocks_included += 1;
         return;
     }
     let near = floor.near_from(t0);
-    beam_tests(tr, tile, b, (xs, ys, &corners), (t0, near, t1), live, st);
+    beam_tests(tr, tile, b, &corners, (t0, near, t1), live, st);
 }
 
 // The beam tests of a block of several pixels over its T range: rejected,
@@ -207,7 +205,7 @@ fn beam_tests(
     tr: &Tracer<'_>,
     tile: &mut TileRays,
     b: Rect,
-    (xs, ys, corners): ((f64, f64), (f64, f64), &CornerRays),
+    corners: &CornerRays,
     (t0, near, t1): (f64, f64, f64),
     live: &[u32],
     st: &mut TileState,
@@ -249,7 +247,7 @@ fn beam_tests(
         // one slice of the tile (else its points run the slices' tapes).
         let bracket = tr
             .within_one_slice(ta, tb2)
-            .then(|| tr.beam_region(xs, ys, Interval::new(ta, tb2)))
+            .then(|| tr.corner_region(corners, Interval::new(ta, tb2)))
             .flatten()
             .and_then(|region| tr.pruned_to(region, st));
         match bracket {
@@ -282,7 +280,7 @@ fn beam_tests(
     let end = tr.slice_end_after(ta).map_or(t1, |e| e.min(t1));
     let window = Interval::new(ta, end.min(reach));
     let floor = Floor { at: ta, near: tb };
-    split_pruned(tr, tile, b, (xs, ys, window), floor, &sub_live, st);
+    split_pruned(tr, tile, b, (corners, window), floor, &sub_live, st);
 }
 
 /// Whether every live object is proven positive or undefined over each of
@@ -312,19 +310,19 @@ pub(crate) fn clear_boxes(
 const PRUNE_WINDOW: f64 = 8.0;
 
 // `split`, with the functions first pruned to the block's beam over
-// `window` (screen extents of its pixel centres) where that shrinks them
-// enough (see `Tracer::pruned_to`).
+// `window` (the beam of its pixel centres, whose corner rays are
+// `corners`) where that shrinks them enough (see `Tracer::pruned_to`).
 fn split_pruned(
     tr: &Tracer<'_>,
     tile: &mut TileRays,
     b: Rect,
-    (xs, ys, window): ((f64, f64), (f64, f64), Interval),
+    (corners, window): (&CornerRays, Interval),
     floor: Floor,
     live: &[u32],
     st: &mut TileState,
 ) {
     let pruned = tr
-        .beam_region(xs, ys, window)
+        .corner_region(corners, window)
         .and_then(|region| tr.pruned_to(region, st));
     match pruned {
         Some((evals, live_ops)) => {
