@@ -115,6 +115,7 @@ impl Illinois {
         c
     }
 
+    /// Takes f(c) = `fc` into the bracket.
     pub(crate) fn update(&mut self, c: f64, fc: f64) {
         if fc.is_nan() {
             // Undefined inside the bracket: shrink towards the front end.
@@ -494,7 +495,7 @@ mod tests {
     }
 
     // On a linear function the first secant step lands on the root and
-    // the next evaluation, half the tolerance past it, closes the
+    // the next evaluation, a 64th of the tolerance past it, closes the
     // bracket; curved ones still end within half the tolerance of their
     // root.
     #[test]

@@ -146,13 +146,24 @@ impl Tracer<'_> {
                         Some((p.region, *from, tape))
                     }),
                 };
-                let tree = beam.node(self, tape, t, above, SLICE_DEPTH, None, st)?;
+                let placed = beam.place(self, tape, t)?;
+                let tree = beam.node(self, tape, (t, placed), above, SLICE_DEPTH, st)?;
                 let n = tree.pruned_tape().len();
                 Some((Arc::new(tree) as Arc<dyn Evaluator>, n))
             }
             _ => None,
         })
     }
+}
+
+// A region of a beam's tree, placed before its node is built: its box,
+// the smallest region of the group's tree holding it (when that tape is
+// no longer than the one it would prune from), and its pruning from that
+// tape, where it was made with its sibling's (`None`: not made yet).
+struct Placed<'g> {
+    region: IBox,
+    held: Option<&'g Regional>,
+    pruned: Option<Option<Tape>>,
 }
 
 // The beam a tree of regions is built over.
@@ -172,7 +183,7 @@ struct Beam<'e> {
     pre: Option<(IBox, usize, &'e Option<Tape>)>,
 }
 
-impl Beam<'_> {
+impl<'e> Beam<'e> {
     // The region of the beam over `t`, with its tape pruned from `tape`
     // (exact on a region holding it) or from the group's smallest region
     // holding it, whichever is shorter, and its halves along the rays
@@ -187,20 +198,22 @@ impl Beam<'_> {
     // the group's tape and lets the group answer; its short slices prune
     // from the group's slices.
     //
-    // `ahead` is this region's pruning from `tape`, made with its
-    // sibling's in one pass (see `Beam::halves_ahead`).
-    #[allow(clippy::too_many_arguments)]
+    // The region is placed beforehand (`Beam::place`), with its pruning
+    // from `tape` where that was made with its sibling's.
     fn node(
         &self,
         tr: &Tracer<'_>,
         tape: &Tape,
-        t: Interval,
+        (t, placed): (Interval, Placed<'_>),
         above: (&Arc<dyn Evaluator>, usize),
         depth: u32,
-        ahead: Option<Option<Tape>>,
         st: &mut TileState,
     ) -> Option<Regional> {
-        let (region, held) = self.region(tr, tape, t)?;
+        let Placed {
+            region,
+            held,
+            pruned,
+        } = placed;
         let above = match held {
             Some(h) if h.answer_len() < above.1 => (h.answer(), h.answer_len()),
             _ => above,
@@ -217,7 +230,7 @@ impl Beam<'_> {
                 let source = held.map_or(tape, Regional::pruned_tape);
                 // The pruning of this very region from this very tape,
                 // where the group made it ahead of time: the same tape.
-                let own = match (self.pre, ahead) {
+                let own = match (self.pre, pruned) {
                     (Some((r, from, pre)), _)
                         if r == region && std::ptr::from_ref(source) as usize == from =>
                     {
@@ -251,25 +264,28 @@ impl Beam<'_> {
         let m = t.mid();
         let halves = [Interval::new(t.lo, m), Interval::new(m, t.hi)];
         let tape = node.pruned_tape();
-        let ahead = self.halves_ahead(tr, tape, halves, st);
+        let placed = self.place_halves(tr, tape, halves, st);
         let children = halves
             .into_iter()
-            .zip(ahead)
-            .filter_map(|(half, ahead)| {
-                self.node(tr, tape, half, (&below.0, below.1), depth - 1, ahead, st)
+            .zip(placed)
+            .filter_map(|(half, placed)| {
+                self.node(
+                    tr,
+                    tape,
+                    (half, placed?),
+                    (&below.0, below.1),
+                    depth - 1,
+                    st,
+                )
             })
             .collect();
         Some(node.with_children(children))
     }
 
     // The region of the beam over `t` and the smallest region of the
-    // group's tree that holds it, if its tape is no longer than `tape`.
-    fn region(
-        &self,
-        tr: &Tracer<'_>,
-        tape: &Tape,
-        t: Interval,
-    ) -> Option<(IBox, Option<&Regional>)> {
+    // group's tree that holds it, if its tape is no longer than `tape`;
+    // nothing pruned yet.
+    fn place(&self, tr: &Tracer<'_>, tape: &Tape, t: Interval) -> Option<Placed<'e>> {
         // A group's regions reach a little further along the rays: its
         // tiles' slices, whose ranges come from their own pixels, then
         // fit inside them despite rounding.
@@ -280,30 +296,38 @@ impl Beam<'_> {
             .filter(|g| box_within(&region, &g.region()))
             .map(|g| g.smallest_holding(&region))
             .filter(|h| h.pruned_tape().len() <= tape.len());
-        Some((region, held))
+        Some(Placed {
+            region,
+            held,
+            pruned: None,
+        })
     }
 
-    // Both halves' prunings from `tape`, made in one pass over it (see
-    // `Tape::prune_batch`), when both would prune from it (no region of
-    // the group's tree holds either): on 1000 spheres a region's two
-    // halves were pruned one after the other from the same tape, each
-    // pass dispatching every op again.
-    fn halves_ahead(
+    // Both halves placed, and where both prune from `tape` (no region of
+    // the group's tree holds either), pruned in one pass over it (see
+    // `Tape::prune_batch`): on 1000 spheres a region's two halves were
+    // pruned one after the other from the same tape, each pass
+    // dispatching every op again.
+    fn place_halves(
         &self,
         tr: &Tracer<'_>,
         tape: &Tape,
         halves: [Interval; 2],
         st: &mut TileState,
-    ) -> [Option<Option<Tape>>; 2] {
-        let regions = halves.map(|h| self.region(tr, tape, h));
-        let [Some((r0, None)), Some((r1, None))] = regions else {
-            return [None, None];
-        };
-        let mut pruned = tape
-            .prune_batch(&[r0, r1], usize::MAX, &mut st.workspace)
-            .into_iter()
-            .map(|p| Some(p.map(|p| p.tape)));
-        [pruned.next().flatten(), pruned.next().flatten()]
+    ) -> [Option<Placed<'e>>; 2] {
+        let mut placed = halves.map(|h| self.place(tr, tape, h));
+        if let [Some(p0), Some(p1)] = &mut placed
+            && p0.held.is_none()
+            && p1.held.is_none()
+        {
+            let mut pruned = tape
+                .prune_batch(&[p0.region, p1.region], usize::MAX, &mut st.workspace)
+                .into_iter()
+                .map(|p| p.map(|p| p.tape));
+            p0.pruned = pruned.next();
+            p1.pruned = pruned.next();
+        }
+        placed
     }
 
     // Whether the beam over `t` is deeper than `LONG_ASPECT` times its
