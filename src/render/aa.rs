@@ -694,22 +694,25 @@ impl Ctx<'_, '_> {
             let hb = corners.hull(Interval::point(t));
             probe::scene_interval(tr, &self.all, hb, Form::Natural, st)
         };
-        let Some(tb2) =
-            probe::bracket_end((ta, tb), t1, min_w, &probe::INCLUSION_REACH, &mut whole)
-        else {
+        let Some(tb2) = probe::bracket_end(
+            (ta, tb),
+            t1,
+            min_w,
+            (&probe::INCLUSION_REACH, &[]),
+            &mut whole,
+        ) else {
             // No inclusion bracket; the pixel may still be covered, with
             // its negative cross-section deeper in.
             let covered = cover
-                && probe::bracket_end((ta, tb), t1, min_w, &COVER_REACH, &mut whole).is_some_and(
-                    |tc| {
+                && probe::bracket_end((ta, tb), t1, min_w, (&COVER_REACH, &[]), &mut whole)
+                    .is_some_and(|tc| {
                         self.one_smooth_surface(
                             &corners,
                             &bounds,
                             Interval::new(ta, tc),
                             &mut st.stats,
                         )
-                    },
-                );
+                    });
             return Decision {
                 covered,
                 ..decide(Cell::Split, Floor { at: ta, near: tb })
