@@ -732,6 +732,14 @@ impl Ctx<'_, '_> {
                 break;
             }
         }
+        // A positive cross-section at `a` says nothing of the rays between
+        // `ta` and `a`: one could enter and leave a thin feature there,
+        // before the root `smooth_on` proves unique in [a, b]. The front
+        // narrowing stands only where the beam over [ta, a] is proven
+        // empty.
+        if a > ta && eval_min(Interval::new(ta, a), st).is_some_and(|f| f.lo <= 0.0) {
+            a = ta;
+        }
         let smooth = self.smooth_on(&corners, &bounds, Interval::new(a, b), &mut st.stats);
         // A smooth answer either way (Smooth, or Shading with 2×2
         // sub-samples) leaves nothing for the covered test to decide.
