@@ -9,7 +9,13 @@
 //! vanish on a piece, interval Newton (dF/dt = ∇F·d from `interval_grad`)
 //! shrinks the piece or drops it, and a piece on which that object is
 //! proven monotone with proven opposite signs at its ends holds exactly one
-//! root, which is refined on the point evaluator (Illinois). A piece
+//! root, which is refined on the point evaluator (Illinois). Where dF/dt
+//! holds 0 (a ray passing a kink or a minimum of f) and F is positive at
+//! the midpoint, the extended division cuts a gap around the midpoint
+//! that holds no root (`newton_gap`): near misses are dropped and touching
+//! contacts closed in on in a few steps, instead of bisected to the depth
+//! the tangency policy below asks for (colonnade: a fifth of its interval
+//! evaluations went to 9,728 rays grazing a plate of no thickness). A piece
 //! narrower than the depth tolerance whose ends show a sign change is
 //! refined to its root. Without a sign change, a piece on which 0 ∈ F is
 //! bisected on until it is 64 times narrower than the tolerance, and then
@@ -210,6 +216,14 @@ fn sweep_ray(
                 }
                 Newton::Shrunk(na, nb) if nb - na < 0.5 * (b - a) => stack.push((na, nb)),
                 Newton::Shrunk(na, nb) => halves(na, nb, &mut stack),
+                Newton::Gap(front, back) => {
+                    if let Some(p) = back {
+                        stack.push(p);
+                    }
+                    if let Some(p) = front {
+                        stack.push(p);
+                    }
+                }
             }
         } else {
             halves(a, b, &mut stack);
@@ -284,6 +298,29 @@ fn narrow_hit(
     }
 }
 
+// Interval Newton with extended division, where dF/dt over [a, b] holds 0
+// and F is positive at the midpoint m: by the mean value theorem a root t
+// behind m has F(m) + F'(ξ)(t − m) = 0 with F'(ξ) ≥ dlo, so t − m ≥
+// F(m)/(−dlo), and one before m has m − t ≥ F(m)/dhi: no root lies in the
+// gap between, and none behind (before) m where dlo (dhi) is 0.
+fn newton_gap((a, b): (f64, f64), m: f64, fm: Interval, dfdt: Interval) -> Newton {
+    if fm.lo <= 0.0 {
+        return Newton::Shrunk(a, b);
+    }
+    let f = Interval::point(fm.lo);
+    let front = (dfdt.hi > 0.0).then(|| {
+        // The gap's front end, rounded outward (towards a).
+        let end = Interval::point(m).sub(f.div(Interval::point(dfdt.hi))).hi;
+        (a, end.min(b))
+    });
+    let back = (dfdt.lo < 0.0).then(|| {
+        let start = Interval::point(m).add(f.div(Interval::point(-dfdt.lo))).lo;
+        (start.max(a), b)
+    });
+    let keep = |p: Option<(f64, f64)>| p.filter(|&(x, y)| x <= y);
+    Newton::Gap(keep(front), keep(back))
+}
+
 enum Newton {
     /// No root of the object in the piece.
     Empty,
@@ -291,6 +328,9 @@ enum Newton {
     Unique(f64, f64),
     /// The roots, if any, lie in this sub-piece.
     Shrunk(f64, f64),
+    /// The roots, if any, lie in these sub-pieces before and behind a gap
+    /// around the midpoint (None: no root on that side).
+    Gap(Option<(f64, f64)>, Option<(f64, f64)>),
 }
 
 // One interval Newton step for object k on [a, b], from the centred
@@ -304,7 +344,7 @@ fn newton(
     st: &mut RenderStats,
 ) -> Newton {
     let dfdt = c.dfdt;
-    if dfdt.is_empty() || dfdt.contains(0.0) || !dfdt.lo.is_finite() || !dfdt.hi.is_finite() {
+    if dfdt.is_empty() || !dfdt.lo.is_finite() || !dfdt.hi.is_finite() {
         return Newton::Shrunk(a, b);
     }
     let m = 0.5 * (a + b);
@@ -312,6 +352,9 @@ fn newton(
         c.fm.unwrap_or_else(|| tr.interval(k, ray_box(ray.o, ray.d, Interval::point(m)), st));
     if fm.is_empty() {
         return Newton::Shrunk(a, b);
+    }
+    if dfdt.contains(0.0) {
+        return newton_gap((a, b), m, fm, dfdt);
     }
     let n = Interval::point(m).sub(fm.div(dfdt));
     let (na, nb) = (a.max(n.lo), b.min(n.hi));
@@ -511,5 +554,57 @@ mod tests {
                 grad: None,
             })
         );
+    }
+
+    // |x - 0.3| (+ 1e-9 when `lifted`), written as a max of two lines: its
+    // interval extension over a piece around the kink reaches below zero
+    // by up to half the piece's width, and dF/dt there is [-1, 1].
+    // Off the bisection's dyadic points, where the extension is exact.
+    const KINK: f64 = 0.3;
+
+    fn kink(lifted: bool) -> OfX {
+        fn dfi(x: Interval) -> Interval {
+            if x.lo >= KINK {
+                h(1.0)
+            } else if x.hi <= KINK {
+                h(-1.0)
+            } else {
+                Interval::new(-1.0, 1.0)
+            }
+        }
+        fn f(x: f64) -> f64 {
+            (x - KINK).max(KINK - x)
+        }
+        fn fi(x: Interval) -> Interval {
+            x.sub(h(KINK)).max(h(KINK).sub(x))
+        }
+        OfX {
+            f: if lifted { |x| f(x) + 1e-9 } else { f },
+            df: |x| if x >= KINK { 1.0 } else { -1.0 },
+            fi: if lifted { |x| fi(x).add(h(1e-9)) } else { fi },
+            dfi,
+        }
+    }
+
+    #[test]
+    fn a_kink_touching_zero_is_drawn_at_its_vertex() {
+        // No sign change: the tangency policy draws it, once the pieces
+        // around the vertex are narrow enough; the gaps Newton cuts around
+        // each midpoint (F > 0 there, |dF/dt| ≤ 1) close in on it.
+        let (hit, st, tol) = trace(kink(false));
+        let hit = hit.unwrap();
+        assert!((hit.t - 2.3).abs() <= tol, "{} vs 2.3 ± {tol}", hit.t);
+        assert!(st.interval_evals < 20, "{} evaluations", st.interval_evals);
+    }
+
+    #[test]
+    fn a_kinked_near_miss_is_not_drawn_as_a_tangency() {
+        // 1e-9 above zero at the kink, far below what bisection to a 64th
+        // of the tolerance can separate from zero: the gap around a
+        // midpoint where F ≥ 1e-9 + its distance to the kink covers the
+        // kink.
+        let (hit, st, _) = trace(kink(true));
+        assert_eq!(hit, None);
+        assert!(st.interval_evals < 20, "{} evaluations", st.interval_evals);
     }
 }
