@@ -315,13 +315,10 @@ fn edge_results() {
     assert_eq!(exp.lo, 0.0);
     assert!(exp.hi >= 1.0 && exp.hi < 1.0 + 1e-15);
     assert_eq!(Interval::ENTIRE.sin(), Interval::new(-1.0, 1.0));
-    // 0·inf products are skipped and 0 joins the hull: [0, 0] rounded
-    // (out by 2^-511, see `interval::up`).
+    // A factor [0, 0] makes the product exactly [0, 0], even against an
+    // unbounded factor (0 times any real is 0).
     let z = Interval::new(0.0, 0.0).mul(Interval::ENTIRE);
-    assert!(
-        z.lo <= 0.0 && z.hi >= 0.0 && z.width() <= 2f64.powi(-510),
-        "{z:?}"
-    );
+    assert!(z.lo == 0.0 && z.hi == 0.0, "{z:?}");
     let d = Interval::new(1.0, 2.0).div(Interval::new(0.0, 4.0));
     assert!(d.lo <= 0.25 && d.lo > 0.24 && d.hi == f64::INFINITY);
     let d = Interval::new(1.0, 2.0).div(Interval::new(-4.0, 0.0));
@@ -385,4 +382,41 @@ proptest! {
             check(Interval::point(ax).pow(q), ax.powf(y), &format!("pow {ax:e} {y:e}"));
         }
     }
+}
+
+// Zeros that are exact stay exact: a sum that rounds to 0 is exact (x + y
+// rounds to 0 only for y = -x), as is 0 times or over a real; products
+// that underflow to 0 are not, and stay rounded out.
+#[test]
+fn exact_zeros_are_not_rounded_out() {
+    let z = Interval::point(0.0);
+    let exact = |i: Interval, what: &str| assert!(i.lo == 0.0 && i.hi == 0.0, "{what}: {i:?}");
+    exact(z.add(z), "0 + 0");
+    exact(z.sub(z), "0 - 0");
+    exact(Interval::point(0.3).sub(Interval::point(0.3)), "0.3 - 0.3");
+    exact(
+        Interval::point(-2.5).add(Interval::point(2.5)),
+        "-2.5 + 2.5",
+    );
+    exact(z.mul(Interval::new(-3.0, 7.0)), "0 · [-3, 7]");
+    exact(Interval::new(-3.0, 7.0).mul(z), "[-3, 7] · 0");
+    exact(Interval::new(-3.0, 7.0).mul_point(0.0), "[-3, 7] · point 0");
+    exact(z.mul_point(5.0), "0 · point 5");
+    exact(z.div(Interval::new(2.0, 3.0)), "0 / [2, 3]");
+    exact(z.div(Interval::new(-3.0, -2.0)), "0 / [-3, -2]");
+    assert!(z.mul(Interval::EMPTY).is_empty() && Interval::EMPTY.mul(z).is_empty());
+    assert!(Interval::EMPTY.add(z).is_empty() && z.div(Interval::EMPTY).is_empty());
+    // 1e-200 · 1e-200 underflows to 0 in floating point; the real product
+    // is positive and must stay inside.
+    let tiny = Interval::point(1e-200);
+    let p = tiny.mul(tiny);
+    assert!(p.lo <= 0.0 && p.hi > 0.0, "{p:?}");
+    // A sum that does not cancel still moves out past its rounding.
+    let s = Interval::point(0.1).add(Interval::point(0.2));
+    assert!(s.lo < 0.30000000000000004 && s.hi > 0.3, "{s:?}");
+    let s = Interval::point(1e-310).add(Interval::point(2e-310));
+    assert!(
+        s.lo <= 3e-310 && s.hi >= 3e-310,
+        "subnormal sums are exact: {s:?}"
+    );
 }

@@ -133,6 +133,28 @@ pub fn up(v: f64) -> f64 {
     c + mx(c.abs() * STEP, FLOOR_STEP)
 }
 
+/// An upper bound of the real sum or difference that rounded to `v`:
+/// `c + |c|·2⁻⁵²` in round-to-nearest, with `c = max(-MAX, v)`; [`up`]
+/// without its floor, so an exact zero stays zero.
+///
+/// Why it is sound: an addition is exact where its result is zero or
+/// subnormal (both operands are multiples of 2⁻¹⁰⁷⁴, and so is the sum,
+/// which then needs no rounding: `x + y` rounds to 0 only when x = −y),
+/// and for a normal result its error is at most half an ulp of `c`, while
+/// `|c|·2⁻⁵²` is at least one ulp of `c`, so the bound is at or above the
+/// next float above `c` (see [`up`]). The floor of `up` stays where it is
+/// needed, on products and quotients, which can underflow to 0.
+///
+/// Why it matters: a directional derivative along a camera axis adds
+/// exact zeros (dx/dt = 0), and `up` turned each into ±2⁻⁵¹¹; the
+/// beam's inclusion test then saw dF/dt reach 6.6e-153 above zero on the
+/// edge-on faces of colonnade and split 5,000 blocks into single rays.
+#[inline]
+pub fn up_sum(v: f64) -> f64 {
+    let c = mx(-f64::MAX, v);
+    c + c.abs() * STEP
+}
+
 /// A lower bound below `v`: `-up(-v)` (see [`up`]).
 #[inline]
 pub fn down(v: f64) -> f64 {
@@ -266,19 +288,31 @@ impl Interval {
         Interval::new(-self.hi, -self.lo)
     }
 
-    /// `self + o`.
+    /// `self + o` (each bound rounded out by [`up_sum`]).
     #[inline]
     pub fn add(self, o: Interval) -> Interval {
         let ((an, ah), (bn, bh)) = (self.lanes(), o.lanes());
-        Interval::from_lanes(up(an + bn), up(ah + bh))
+        Interval::from_lanes(up_sum(an + bn), up_sum(ah + bh))
     }
 
-    /// `self - o`.
+    /// `self - o` (each bound rounded out by [`up_sum`]).
     #[inline]
     pub fn sub(self, o: Interval) -> Interval {
         let ((an, ah), (bn, bh)) = (self.lanes(), o.lanes());
-        Interval::from_lanes(up(an + bh), up(ah + bn))
+        Interval::from_lanes(up_sum(an + bh), up_sum(ah + bn))
     }
+
+    /// Whether this is the point interval [0, 0] (either zero's sign).
+    #[inline]
+    pub fn is_zero(self) -> bool {
+        self.lo == 0.0 && self.hi == 0.0
+    }
+
+    /// `[0, 0]` as the lanes `(+0, +0)`: the exact product of a factor
+    /// [0, 0] and any non-EMPTY interval (0 times a real is 0), and the
+    /// exact quotient of [0, 0] by a divisor without 0. Rounding it out
+    /// would turn every zero partial derivative into ±2⁻⁵¹¹.
+    const ZERO_LANES: Interval = Interval { lo: -0.0, hi: 0.0 };
 
     /// Lanes of the hull of the four bound products (or quotients, with
     /// `op` = division) of non-EMPTY operands: both lanes are maxima, of
@@ -303,10 +337,14 @@ impl Interval {
     }
 
     /// `self * o`: hull of the four bound products, ignoring the NaN of
-    /// 0·inf, each bound then rounded outward; EMPTY if either is.
+    /// 0·inf, each bound then rounded outward; EMPTY if either is, and
+    /// exactly [0, 0] where a factor is [0, 0] and the other is not EMPTY.
     #[inline]
     pub fn mul(self, o: Interval) -> Interval {
         let finite = |i: Interval| i.lo.is_finite() && i.hi.is_finite();
+        if (self.is_zero() && !o.is_empty()) || (o.is_zero() && !self.is_empty()) {
+            return Interval::ZERO_LANES;
+        }
         if finite(self) && finite(o) {
             // No candidate can be NaN, so the lanes are `-min` and `max`
             // of the products: the same values as `hull4` finds (a zero's
@@ -334,6 +372,9 @@ impl Interval {
     #[inline]
     pub fn mul_point(self, t: f64) -> Interval {
         if t.is_finite() && self.lo.is_finite() && self.hi.is_finite() {
+            if t == 0.0 || self.is_zero() {
+                return Interval::ZERO_LANES;
+            }
             // `mul`'s four products are these two, each twice.
             let (a, b) = (self.lo * t, self.hi * t);
             return Interval::from_lanes(up(-mn(a, b)), up(mx(a, b)));
@@ -348,6 +389,9 @@ impl Interval {
         if o.lo > 0.0 || o.hi < 0.0 {
             if self.is_empty() || o.is_empty() {
                 return Interval::EMPTY;
+            }
+            if self.is_zero() {
+                return Interval::ZERO_LANES;
             }
             let (n, h) = self.hull4(o, |x, y| x / y);
             return Interval::from_lanes(n, h);

@@ -287,6 +287,26 @@ impl Emitter<'_, '_> {
         self.b.ins().fadd(c, t)
     }
 
+    /// `interval::up_sum` on both lanes: `c + |c|·2⁻⁵²` with
+    /// `c = max(-MAX, v)` (an exact zero stays zero).
+    pub fn vup_sum(&mut self, v: Value) -> Value {
+        let neg_max = self.vconst(-f64::MAX, -f64::MAX);
+        let c = self.vmax(neg_max, v);
+        let a = self.vabs(c);
+        let step = self.vconst(f64::EPSILON, f64::EPSILON);
+        let t = self.b.ins().fmul(a, step);
+        self.b.ins().fadd(c, t)
+    }
+
+    /// All ones in both lanes where `x` is the interval [0, 0] (both lanes
+    /// zero), none elsewhere (NaN lanes compare unequal).
+    fn vzero_mask(&mut self, x: Value) -> Value {
+        let z = self.vconst(0.0, 0.0);
+        let m = self.vcmp(FloatCC::Equal, x, z);
+        let s = self.swap(m);
+        self.b.ins().band(m, s)
+    }
+
     /// `|x|` lane-wise, as one `andpd` with a (reused) mask constant
     /// (Cranelift's `fabs` rebuilds the mask with two instructions).
     pub(super) fn vabs(&mut self, x: Value) -> Value {
@@ -362,13 +382,13 @@ impl Emitter<'_, '_> {
 
     pub fn iv_add(&mut self, a: Iv, b: Iv) -> Iv {
         let s = self.b.ins().fadd(a.0, b.0);
-        Iv(self.vup(s))
+        Iv(self.vup_sum(s))
     }
 
     pub fn iv_sub(&mut self, a: Iv, b: Iv) -> Iv {
         let bs = self.swap(b.0);
         let s = self.b.ins().fadd(a.0, bs);
-        Iv(self.vup(s))
+        Iv(self.vup_sum(s))
     }
 
     /// `Interval::hull4` with packed products or quotients: lane 0 gathers
@@ -415,6 +435,17 @@ impl Emitter<'_, '_> {
             }
             _ => self.hull4(a, b, false),
         };
+        // A factor [0, 0] makes the product exactly [0, 0] (lanes +0);
+        // an EMPTY one still wins below.
+        let za = self.vzero_mask(a.0);
+        let zero = match b_const {
+            Some(c) if c.is_finite() && c != 0.0 => za,
+            _ => {
+                let zb = self.vzero_mask(b.0);
+                self.b.ins().bor(za, zb)
+            }
+        };
+        let r = self.b.ins().band_not(r, zero);
         Iv(self.vempty_if(a.0, b.0, r))
     }
 
@@ -437,6 +468,9 @@ impl Emitter<'_, '_> {
 
         self.b.switch_to_block(fast);
         let h = self.hull4(a, b, true);
+        // [0, 0] divided by a divisor without 0 is exactly [0, 0].
+        let za = self.vzero_mask(a.0);
+        let h = self.b.ins().band_not(h, za);
         let h = self.vempty_if(a.0, b.0, h);
         self.b.ins().jump(join, &[BlockArg::Value(h)]);
 

@@ -539,6 +539,38 @@ mod tests {
     }
 
     #[test]
+    fn packed_sum_rounding_matches_the_reference_bit_for_bit() {
+        // As above for `vup_sum` and `interval::up_sum`, which leaves zero
+        // and subnormal sums alone (they are exact) and moves every other
+        // finite value up by one or two ulps.
+        let lane = |k: u8| {
+            compile_unary(move |e, x| {
+                let v = e.b.ins().splat(types::F64X2, x);
+                let m = e.vconst(1.0, -1.0);
+                let v = e.b.ins().fmul(v, m);
+                let u = e.vup_sum(v);
+                e.b.ins().extractlane(u, k)
+            })
+        };
+        let (l0, l1) = (lane(0), lane(1));
+        for x in cases() {
+            let (u0, u1) = (l0.call([x, 0.0, 0.0]), l1.call([x, 0.0, 0.0]));
+            let (r0, r1) = (crate::interval::up_sum(x), crate::interval::up_sum(-x));
+            let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
+            assert!(same(u0, r0), "up_sum({x:e}): {u0:e} vs {r0:e}");
+            assert!(same(u1, r1), "up_sum({:e}): {u1:e} vs {r1:e}", -x);
+            if x.is_finite() {
+                let exact = x.abs() < f64::MIN_POSITIVE;
+                let most = x.next_up().next_up();
+                assert!(
+                    if exact { r0 == x } else { r0 > x && r0 <= most },
+                    "up_sum({x:e}) = {r0:e}"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn min_max_flavours_match_the_reference() {
         use crate::interval::{max_nan, min_nan};
         for y in cases() {
