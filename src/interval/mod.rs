@@ -149,6 +149,11 @@ pub fn up(v: f64) -> f64 {
 /// exact zeros (dx/dt = 0), and `up` turned each into ±2⁻⁵¹¹; the
 /// beam's inclusion test then saw dF/dt reach 6.6e-153 above zero on the
 /// edge-on faces of colonnade and split 5,000 blocks into single rays.
+///
+/// A NaN `c` (an EMPTY bound) meets a NaN step, and the sum's NaN may
+/// carry either one's sign and payload, depending on how the compiler
+/// orders the addition: NaN payloads are not part of the semantics (every
+/// bit-for-bit comparison takes any NaN as equal to any other).
 #[inline]
 pub fn up_sum(v: f64) -> f64 {
     let c = mx(-f64::MAX, v);
