@@ -8,13 +8,13 @@
 //! background and no ray is traced. Otherwise, with [t0, ta] rejected, the
 //! inclusion test checks F over the hull of the block's points at t = ta
 //! (strictly positive) and at some tb > ta (strictly negative), and that
-//! F is strictly decreasing along every ray over the beam piece [ta, tb]
-//! (interval gradient · direction < 0; where tb lies deep, as behind a
+//! F is non-increasing along every ray over the beam piece [ta, tb]
+//! (interval gradient · direction ≤ 0; where tb lies deep, as behind a
 //! grazing beam, over up to four pieces of [ta, tb]): every ray then has
-//! exactly one root in [ta, tb], its first, and each pixel only refines
-//! that bracket on the point evaluator. Blocks that are neither split in
-//! four, keeping the rejected prefix and dropping objects proven positive
-//! over the whole remaining beam; single pixels get a guaranteed single ray
+//! its first root in [ta, tb], with F ≤ 0 behind it, and each pixel only
+//! refines that bracket on the point evaluator. Blocks that are neither
+//! split in four, keeping the rejected prefix and dropping objects proven
+//! positive over the whole remaining beam; single pixels get a guaranteed single ray
 //! ([`super::ray`]). The interval tests themselves (scene minimum over
 //! a beam piece, the sweep, the inclusion search) are shared with
 //! anti-aliasing in `super::probe`.
@@ -407,9 +407,10 @@ const DEEP_SPLITS: u32 = 2;
 // `decreasing` over T = [a, b], or else over its halves, down to `depth`
 // levels: a narrower piece's hull has a tighter gradient enclosure. Each
 // piece having the property is enough: on each, {t : F ≤ 0} is a final
-// part of the piece (the live objects that may vanish there all strictly
-// decrease), so over consecutive pieces it is one final part of T, and a
-// ray with a sign change over T still has exactly one root there.
+// part of the piece (the live objects that may vanish there do not
+// increase), so over consecutive pieces it is one final part of T, and a
+// ray with a sign change over T still has its first root there and F ≤ 0
+// behind it.
 fn decreasing_in_pieces(
     tr: &Tracer<'_>,
     corners: &CornerRays,
