@@ -264,20 +264,12 @@ pub(crate) fn bracket_end(
         return None;
     }
     let w = (tb - ta).max(min_w(ta));
+    // Each multiple, and whether it is one of the deeper ones.
+    let steps = reach.iter().map(|&m| (m, false));
+    let steps = steps.chain(deeper.iter().map(|&m| (m, true)));
     let mut last = None;
-    for &mult in reach {
-        let tb2 = (ta + mult * w).min(t1);
-        let c = cross(tb2);
-        if c.hi < 0.0 {
-            return Some(tb2);
-        }
-        if tb2 >= t1 {
-            return None;
-        }
-        last = Some(c);
-    }
-    for &mult in deeper {
-        if !last.is_some_and(leans_inside) {
+    for (mult, deep) in steps {
+        if deep && !last.is_some_and(leans_inside) {
             return None;
         }
         let tb2 = (ta + mult * w).min(t1);

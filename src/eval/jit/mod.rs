@@ -509,64 +509,61 @@ mod tests {
         v
     }
 
-    #[test]
-    fn packed_rounding_matches_the_reference_bit_for_bit() {
-        // Each lane of `vup` is `interval::up`: a value in lane 0 and its
-        // negation in lane 1, read back from both lanes.
+    // Checks a packed rounding step against its scalar reference on every
+    // case, lane by lane: a value in lane 0 and its negation in lane 1,
+    // read back from both lanes. Returns each case with the reference's
+    // result, for the caller's bounds.
+    fn packed_matches(
+        round: fn(&mut Emitter, ir::Value) -> ir::Value,
+        reference: fn(f64) -> f64,
+        name: &str,
+    ) -> Vec<(f64, f64)> {
         let lane = |k: u8| {
             compile_unary(move |e, x| {
                 let v = e.b.ins().splat(types::F64X2, x);
                 let m = e.vconst(1.0, -1.0);
                 let v = e.b.ins().fmul(v, m);
-                let u = e.vup(v);
+                let u = round(e, v);
                 e.b.ins().extractlane(u, k)
             })
         };
         let (l0, l1) = (lane(0), lane(1));
-        for x in cases() {
-            let (u0, u1) = (l0.call([x, 0.0, 0.0]), l1.call([x, 0.0, 0.0]));
-            let (r0, r1) = (crate::interval::up(x), crate::interval::up(-x));
-            let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
-            assert!(same(u0, r0), "up({x:e}): {u0:e} vs {r0:e}");
-            assert!(same(u1, r1), "up({:e}): {u1:e} vs {r1:e}", -x);
-            if x.is_finite() {
-                // Two ulps, or 2^-510 near zero (see `interval::up`).
-                let near_zero = (x + 2.0 * crate::interval::FLOOR_STEP).next_up();
-                let most = x.next_up().next_up().max(near_zero);
-                assert!(r0 > x && r0 <= most, "up({x:e}) = {r0:e}");
-            }
+        let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
+        cases()
+            .into_iter()
+            .map(|x| {
+                let (u0, u1) = (l0.call([x, 0.0, 0.0]), l1.call([x, 0.0, 0.0]));
+                let (r0, r1) = (reference(x), reference(-x));
+                assert!(same(u0, r0), "{name}({x:e}): {u0:e} vs {r0:e}");
+                assert!(same(u1, r1), "{name}({:e}): {u1:e} vs {r1:e}", -x);
+                (x, r0)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn packed_rounding_matches_the_reference_bit_for_bit() {
+        let up = packed_matches(|e, v| e.vup(v), crate::interval::up, "up");
+        for (x, r) in up.into_iter().filter(|(x, _)| x.is_finite()) {
+            // Two ulps, or 2^-510 near zero (see `interval::up`).
+            let near_zero = (x + 2.0 * crate::interval::FLOOR_STEP).next_up();
+            let most = x.next_up().next_up().max(near_zero);
+            assert!(r > x && r <= most, "up({x:e}) = {r:e}");
         }
     }
 
     #[test]
     fn packed_sum_rounding_matches_the_reference_bit_for_bit() {
-        // As above for `vup_sum` and `interval::up_sum`, which leaves zero
-        // and subnormal sums alone (they are exact) and moves every other
-        // finite value up by one or two ulps.
-        let lane = |k: u8| {
-            compile_unary(move |e, x| {
-                let v = e.b.ins().splat(types::F64X2, x);
-                let m = e.vconst(1.0, -1.0);
-                let v = e.b.ins().fmul(v, m);
-                let u = e.vup_sum(v);
-                e.b.ins().extractlane(u, k)
-            })
-        };
-        let (l0, l1) = (lane(0), lane(1));
-        for x in cases() {
-            let (u0, u1) = (l0.call([x, 0.0, 0.0]), l1.call([x, 0.0, 0.0]));
-            let (r0, r1) = (crate::interval::up_sum(x), crate::interval::up_sum(-x));
-            let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
-            assert!(same(u0, r0), "up_sum({x:e}): {u0:e} vs {r0:e}");
-            assert!(same(u1, r1), "up_sum({:e}): {u1:e} vs {r1:e}", -x);
-            if x.is_finite() {
-                let exact = x.abs() < f64::MIN_POSITIVE;
-                let most = x.next_up().next_up();
-                assert!(
-                    if exact { r0 == x } else { r0 > x && r0 <= most },
-                    "up_sum({x:e}) = {r0:e}"
-                );
-            }
+        // `up_sum` leaves zero and subnormal sums alone (they are exact)
+        // and moves every other finite value up by one or two ulps.
+        let up = packed_matches(|e, v| e.vup_sum(v), crate::interval::up_sum, "up_sum");
+        for (x, r) in up.into_iter().filter(|(x, _)| x.is_finite()) {
+            let exact = x.abs() < f64::MIN_POSITIVE;
+            let most = x.next_up().next_up();
+            assert!(
+                if exact { r == x } else { r > x && r <= most },
+                "up_sum({x:e}) = {r:e}"
+            );
         }
     }
 
