@@ -14,10 +14,10 @@
 //! its first root in [ta, tb], with F ≤ 0 behind it, and each pixel only
 //! refines that bracket on the point evaluator. Blocks that are neither
 //! split in four, keeping the rejected prefix and dropping objects proven
-//! positive over the whole remaining beam; single pixels get a guaranteed single ray
-//! ([`super::ray`]). The interval tests themselves (scene minimum over
-//! a beam piece, the sweep, the inclusion search) are shared with
-//! anti-aliasing in `super::probe`.
+//! positive over the whole remaining beam; single pixels get a guaranteed
+//! single ray ([`super::ray`]). The interval tests themselves (scene
+//! minimum over a beam piece, the sweep, the inclusion search) are shared
+//! with anti-aliasing in `super::probe`.
 //!
 //! A block whose rays' start points (each at its own clip start) all lie
 //! where F < 0 is settled at once: every ray hits at its start (cut-away
