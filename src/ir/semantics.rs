@@ -51,8 +51,9 @@
 use super::{BinaryOp, Op, UnaryOp};
 use crate::interval::{Interval, max_nan, min_nan, powi_point, rem_euclid, sign};
 
-/// A point value and its gradient (∂f/∂x, ∂f/∂y, ∂f/∂z).
-#[derive(Copy, Clone, Debug, PartialEq)]
+/// A point value and its gradient (∂f/∂x, ∂f/∂y, ∂f/∂z); the default is
+/// all zeros (a buffer's filler before a batch writes it).
+#[derive(Copy, Clone, Debug, Default, PartialEq)]
 pub struct Grad {
     /// f at the point.
     pub v: f64,

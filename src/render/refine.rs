@@ -236,8 +236,10 @@ pub(crate) struct RefineScratch {
     cs: Vec<f64>,
     objects: Vec<usize>,
     grads: Vec<Grad>,
+    // One object's roots among several: their indices, points and normals.
     at: Vec<usize>,
     at_points: Vec<[f64; 3]>,
+    at_grads: Vec<Grad>,
 }
 
 /// [`refine`] for many brackets (`scratch.brackets`): each result is the
@@ -261,6 +263,7 @@ pub(crate) fn refine_batch(
         grads,
         at,
         at_points,
+        at_grads,
     } = scratch;
     let n = brackets.len();
     let mut out = vec![None; n];
@@ -326,35 +329,22 @@ pub(crate) fn refine_batch(
     }
     // The normals at the roots, one gradient batch per object.
     grads.clear();
-    grads.resize(
-        points.len(),
-        Grad {
-            v: 0.0,
-            d: [0.0; 3],
-        },
-    );
+    grads.resize(points.len(), Grad::default());
     if let [only] = live {
         tr.point_grads(*only as usize, points, &mut batch.cols, grads, st);
     } else {
         let mut on: Vec<usize> = objects.clone();
         on.sort_unstable();
         on.dedup();
-        let mut some = Vec::new();
         for obj in on {
             at.clear();
             at.extend((0..points.len()).filter(|&j| objects[j] == obj));
             at_points.clear();
             at_points.extend(at.iter().map(|&j| points[j]));
-            some.clear();
-            some.resize(
-                at.len(),
-                Grad {
-                    v: 0.0,
-                    d: [0.0; 3],
-                },
-            );
-            tr.point_grads(obj, at_points, &mut batch.cols, &mut some, st);
-            for (&j, g) in at.iter().zip(&some) {
+            at_grads.clear();
+            at_grads.resize(at.len(), Grad::default());
+            tr.point_grads(obj, at_points, &mut batch.cols, at_grads, st);
+            for (&j, g) in at.iter().zip(at_grads.iter()) {
                 grads[j] = *g;
             }
         }
