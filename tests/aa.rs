@@ -439,3 +439,33 @@ fn covered_pixels_are_sampled_sparser_and_every_sample_hits() {
             .all(|&s| matches!(s, 1 | 4 | 5 | 16 | 64 | 65))
     );
 }
+
+#[test]
+fn pixels_split_by_shading_alone_take_grid_2_colours() {
+    // On a sphere with a tight threshold, the interior pixels' colour
+    // intervals are too wide: their areas' beams are included, and their
+    // sub-samples are refined in the included bracket, at grid:2's
+    // positions, without beams of their own. They must hit, and agree
+    // with grid:2's colour to within the roots' tolerance.
+    let (scene, evals) = load("sphere");
+    let n = 40u32;
+    let aa = Aa::Iaa {
+        threshold: 1.0 / 256.0,
+        depth: 2,
+    };
+    let out = go(&scene, &evals, n, aa, 1);
+    let grid = go(&scene, &evals, n, Aa::Grid(2), 1);
+    let four: Vec<usize> = (0..(n * n) as usize)
+        .filter(|&k| out.samples[k] == 4)
+        .collect();
+    assert!(four.len() > 200, "only {} pixels at 2×2", four.len());
+    assert!(out.stats.aa_split_by_shading >= four.len() as u64 / 2);
+    let (a, g) = (out.image.as_raw(), grid.image.as_raw());
+    for &k in &four {
+        assert_eq!(out.coverage[k], 1.0, "pixel {k}");
+        for c in 3 * k..3 * k + 3 {
+            let d = (i32::from(a[c]) - i32::from(g[c])).abs();
+            assert!(d <= 1, "pixel {k}: {} against grid:2's {}", a[c], g[c]);
+        }
+    }
+}

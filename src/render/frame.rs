@@ -316,6 +316,7 @@ impl<'a> Frame<'a> {
                         mask: None,
                         floors: None,
                         shadow_hints: None,
+                        brackets: None,
                     };
                     let out = render_tile(tr, opts, spec, bg);
                     if s > 1 { downsample(out, s) } else { out }
@@ -534,8 +535,16 @@ fn anti_alias(
         if !these.iter().any(|&s| s) {
             continue;
         }
-        let floors = (these.as_slice(), c.floors.as_slice(), hints.as_slice());
-        let (lin, cov, dep) = trace_split(fine_tr, opts, area, floors, 1 << l, bg, &mut st.stats);
+        let known = (c.floors.as_slice(), hints.as_slice(), c.brackets.as_slice());
+        let (lin, cov, dep) = trace_split(
+            fine_tr,
+            opts,
+            area,
+            (&these, known),
+            1 << l,
+            bg,
+            &mut st.stats,
+        );
         let all =
             sub.get_or_insert_with(|| (vec![[0.0; 3]; n], vec![0.0; n], vec![f64::INFINITY; n]));
         for k in (0..n).filter(|&k| these[k]) {

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use super::RenderOptions;
 use super::probe::Floor;
 use super::stats::RenderStats;
-use super::tile::{ShadowHint, TileOut, TileSpec, render_tile};
+use super::tile::{RootBracket, ShadowHint, TileOut, TileSpec, render_tile};
 use super::tracer::Tracer;
 
 // Averages each s×s block of a tile traced at s× resolution, in linear
@@ -65,6 +65,11 @@ pub(super) fn downsample(t: TileOut, s: u32) -> TileOut {
 /// nearest hit of its sub-samples.
 pub(super) type SplitSamples = (Vec<[f64; 3]>, Vec<f64>, Vec<f64>);
 
+/// What a tile's pixel-area tests proved for the sub-samples of each
+/// pixel (row-major): where its rays may start, the shadow state they may
+/// reuse, and the bracket of their first roots.
+pub(super) type PixelFacts<'a> = (&'a [Floor], &'a [ShadowHint], &'a [Option<RootBracket>]);
+
 /// Side, in pixels, of the squares of a tile whose split pixels are traced
 /// together at the fine resolution. A fine tile spans only squares that
 /// hold a split pixel: building, clipping and sweeping the sub-samples of
@@ -72,7 +77,10 @@ pub(super) type SplitSamples = (Vec<[f64; 3]>, Vec<f64>, Vec<f64>);
 const FINE_GROUP: u32 = 2;
 
 // The sub-samples of a tile's split pixels (`split`, with the ray
-// parameter each pixel's area was proven empty up to in `floors`),
+// parameter each pixel's area was proven empty up to in `floors`, the
+// shadow state its sub-samples may reuse in `hints`, and the bracket of
+// its sub-samples' first roots, where its area's beam was included, in
+// `brackets`),
 // traced with `fine` at `f`× the resolution, square by square of
 // `FINE_GROUP` pixels, other sub-samples masked out: per pixel of the
 // tile (`area`: x0, y0, w, h) the mean linear colour, covered fraction
@@ -81,7 +89,7 @@ pub(super) fn trace_split(
     fine: &Tracer<'_>,
     opts: &RenderOptions,
     (x0, y0, w, h): (u32, u32, u32, u32),
-    (split, floors, hints): (&[bool], &[Floor], &[ShadowHint]),
+    (split, (floors, hints, brackets)): (&[bool], PixelFacts<'_>),
     f: u32,
     bg: [f64; 3],
     stats: &mut RenderStats,
@@ -124,6 +132,8 @@ pub(super) fn trace_split(
             // empty up to: the fine render need not sweep that prefix again.
             let starts: Vec<Floor> = (0..nf).map(|k| floors[pixel(k)]).collect();
             let fine_hints: Vec<ShadowHint> = (0..nf).map(|k| hints[pixel(k)]).collect();
+            let fine_brackets: Vec<Option<RootBracket>> =
+                (0..nf).map(|k| brackets[pixel(k)]).collect();
             let spec = TileSpec {
                 x0: (x0 + g.0) * f,
                 y0: (y0 + g.1) * f,
@@ -132,6 +142,7 @@ pub(super) fn trace_split(
                 mask: Some(&mask),
                 floors: Some(&starts),
                 shadow_hints: Some(&fine_hints),
+                brackets: Some(&fine_brackets),
             };
             (g, downsample(render_tile(fine, &fine_opts, spec, bg), f))
         })

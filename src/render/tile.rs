@@ -36,6 +36,27 @@ pub(crate) struct TileSpec<'m> {
     /// Row-major: shadow states a sample may take instead of tracing
     /// its shadow segments (None: every sample traces its own).
     pub shadow_hints: Option<&'m [ShadowHint]>,
+    /// Row-major: where a sample's first root is already bracketed
+    /// (None: nowhere). Such a sample is refined in its bracket and kept
+    /// out of the tile's beams.
+    pub brackets: Option<&'m [Option<RootBracket>]>,
+}
+
+/// A bracket proven to hold the first root of every ray of a beam (IAA's
+/// pixel-area inclusion test, for the sub-samples of a pixel split by
+/// shading alone): every object is positive along the rays before `a`;
+/// over the beam's hull on `[a, b]`, inside the bounds, object `obj`
+/// alone may vanish, its cross-section is positive at `a` and negative at
+/// `b`, and it decreases strictly along every ray. So each ray's first
+/// hit is `obj`'s one root in `[a, b]`.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub(crate) struct RootBracket {
+    /// Front end: f > 0 on every ray.
+    pub a: f64,
+    /// Back end: f < 0 on every ray.
+    pub b: f64,
+    /// The object hit.
+    pub obj: usize,
 }
 
 /// The shadow state of a nearby sample that a sample may reuse: IAA's
@@ -115,6 +136,7 @@ pub(crate) fn render_tile(
         };
     }
     let mut tile = tile_rays(tr, opts, &spec);
+    let bracketed = refine_bracketed(tr, &spec, &mut tile, &mut st);
     // Visibility inside the tile's beam runs on functions pruned to it;
     // shading and shadows, whose segments leave the beam, keep `tr`.
     let pruned = prune_to_tile(tr, &tile, spec.h, &mut st);
@@ -129,6 +151,10 @@ pub(crate) fn render_tile(
         None => tr,
     };
     visibility(tr_vis, opts.method, &mut tile, spec.h, &mut st);
+    for (k, h) in bracketed {
+        tile.hits[k] = Some(h);
+        tile.class[k] = Class::Included;
+    }
     st.stats.trace_cpu_ms += ms_since(t_trace);
 
     // Hit points lie in the tile's beam: their normals may come from the
@@ -269,6 +295,34 @@ fn proven_empty(
     });
     st.stats.blocks_rejected += u64::from(empty);
     empty
+}
+
+// The hits of the samples whose first root `spec` brackets, each refined
+// in its bracket, and those samples taken out of the tile's beams (their
+// slabs cleared). A sample whose bracket shows no sign change at points
+// (rounding at the limits of precision) is left to the beams.
+fn refine_bracketed(
+    tr: &Tracer<'_>,
+    spec: &TileSpec<'_>,
+    tile: &mut TileRays,
+    st: &mut TileState,
+) -> Vec<(usize, super::Hit)> {
+    let Some(brackets) = spec.brackets else {
+        return Vec::new();
+    };
+    let mut hits = Vec::new();
+    for (k, b) in brackets.iter().enumerate() {
+        let Some(b) = b else { continue };
+        if tile.slabs[k].is_none() {
+            continue;
+        }
+        let live = [b.obj as u32];
+        if let Some(h) = super::refine::refine(tr, &tile.rays[k], &live, b.a, b.b, &mut st.stats) {
+            tile.slabs[k] = None;
+            hits.push((k, h));
+        }
+    }
+    hits
 }
 
 // The tile's pixel rays and their ranges inside the bounds, nothing traced.
@@ -678,6 +732,7 @@ mod tests {
             mask: None,
             floors: None,
             shadow_hints: None,
+            brackets: None,
         }
     }
 }
