@@ -41,8 +41,9 @@
 //! depth 3 with a quarter to a third of the samples (metaballs 16.4 → 4.6
 //! samples a pixel, RMSE 3.11e-4 either way).
 //! The inclusion proof holds for every ray of the pixel's area, so those
-//! sub-samples are refined in its bracket directly ([`RootBracket`]),
-//! with no beam of their own; and where a cell larger than a pixel was
+//! sub-samples (and those of an included pixel on a shadow edge) are
+//! refined in its bracket directly ([`RootBracket`]), with no beam of
+//! their own; and where a cell larger than a pixel was
 //! included but its colour interval was too wide, its quarters inherit
 //! the bracket and only narrow it and test their own colour interval
 //! (metaballs at 256² with threshold 1/4, one thread: the pixel tests
@@ -544,8 +545,9 @@ pub(crate) struct Classified {
     pub floors: Vec<Floor>,
     /// Which pixels sit on a shadow edge.
     pub edge: Vec<bool>,
-    /// The bracket of each pixel split by shading alone (see
-    /// [`Sampling::Shading`]): its sub-samples are refined there.
+    /// The bracket of each split pixel whose area's beam was included
+    /// (split by shading alone, or on a shadow edge): its sub-samples are
+    /// refined there.
     pub brackets: Vec<Option<RootBracket>>,
 }
 
@@ -657,9 +659,7 @@ impl Ctx<'_, '_> {
                 Sampling::Full
             };
             st.stats.aa_split_covered += u64::from(sampling[k] == Sampling::Covered);
-            if sampling[k] == Sampling::Shading {
-                brackets[k] = d.bracket;
-            }
+            brackets[k] = d.bracket;
             return;
         }
         for q in b.quarters_by_row() {
