@@ -244,15 +244,21 @@ pub(crate) fn dual_binary<const S: usize>(
     (a, x): IntervalDual<S>,
     (b, y): IntervalDual<S>,
 ) -> IntervalDual<S> {
-    let zip = |f: &dyn Fn(Interval, Interval) -> Interval| -> [Interval; S] {
+    // Generic rather than `&dyn`, so that each op's rule inlines.
+    #[inline(always)]
+    fn zip<const S: usize>(
+        x: [Interval; S],
+        y: [Interval; S],
+        f: impl Fn(Interval, Interval) -> Interval,
+    ) -> [Interval; S] {
         std::array::from_fn(|k| f(x[k], y[k]))
-    };
+    }
     match op {
-        BinaryOp::Add => (a.add(b), zip(&|x, y| x.add(y))),
-        BinaryOp::Sub => (a.sub(b), zip(&|x, y| x.sub(y))),
-        BinaryOp::Mul => (a.mul(b), zip(&|x, y| chain(b, x).add(chain(a, y)))),
-        BinaryOp::Min => (a.min(b), zip(&|x, y| Reference.min_grad(a, b, x, y))),
-        BinaryOp::Max => (a.max(b), zip(&|x, y| Reference.max_grad(a, b, x, y))),
+        BinaryOp::Add => (a.add(b), zip(x, y, |x, y| x.add(y))),
+        BinaryOp::Sub => (a.sub(b), zip(x, y, |x, y| x.sub(y))),
+        BinaryOp::Mul => (a.mul(b), zip(x, y, |x, y| chain(b, x).add(chain(a, y)))),
+        BinaryOp::Min => (a.min(b), zip(x, y, |x, y| Reference.min_grad(a, b, x, y))),
+        BinaryOp::Max => (a.max(b), zip(x, y, |x, y| Reference.max_grad(a, b, x, y))),
         _ => {
             let (v, d) = grad_binary(&mut Reference, op, (a, partials(x)), (b, partials(y)));
             (v, first(d))
@@ -278,7 +284,7 @@ where
 /// `op(a)` and its three partials by the reference rules: the bits of the
 /// interpreter's [`Evaluator::point_grad`], with the ops of distance
 /// fields written out (see [`dual_unary`]).
-#[inline]
+#[inline(always)]
 pub(crate) fn point_dual_unary(op: UnaryOp, (a, x): (f64, [f64; 3])) -> (f64, [f64; 3]) {
     match op {
         UnaryOp::Neg => (-a, x.map(|x| -x)),
@@ -299,24 +305,29 @@ pub(crate) fn point_dual_unary(op: UnaryOp, (a, x): (f64, [f64; 3])) -> (f64, [f
 }
 
 /// `op(a, b)` and its three partials (see [`point_dual_unary`]).
-#[inline]
+#[inline(always)]
 pub(crate) fn point_dual_binary(
     op: BinaryOp,
     (a, x): (f64, [f64; 3]),
     (b, y): (f64, [f64; 3]),
 ) -> (f64, [f64; 3]) {
-    let zip = |f: &dyn Fn(f64, f64) -> f64| -> [f64; 3] { std::array::from_fn(|k| f(x[k], y[k])) };
+    // Generic rather than `&dyn`, so that each op's rule inlines into
+    // the loops that run it.
+    #[inline(always)]
+    fn zip3(x: [f64; 3], y: [f64; 3], f: impl Fn(f64, f64) -> f64) -> [f64; 3] {
+        std::array::from_fn(|k| f(x[k], y[k]))
+    }
     match op {
-        BinaryOp::Add => (a + b, zip(&|x, y| x + y)),
-        BinaryOp::Sub => (a - b, zip(&|x, y| x - y)),
-        BinaryOp::Mul => (a * b, zip(&|x, y| chain(b, x) + chain(a, y))),
+        BinaryOp::Add => (a + b, zip3(x, y, |x, y| x + y)),
+        BinaryOp::Sub => (a - b, zip3(x, y, |x, y| x - y)),
+        BinaryOp::Mul => (a * b, zip3(x, y, |x, y| chain(b, x) + chain(a, y))),
         BinaryOp::Min => (
             point_binary(op, a, b),
-            zip(&|x, y| Reference.min_grad(a, b, x, y)),
+            zip3(x, y, |x, y| Reference.min_grad(a, b, x, y)),
         ),
         BinaryOp::Max => (
             point_binary(op, a, b),
-            zip(&|x, y| Reference.max_grad(a, b, x, y)),
+            zip3(x, y, |x, y| Reference.max_grad(a, b, x, y)),
         ),
         _ => {
             let (v, d) = grad_binary(&mut Reference, op, (a, x.map(Some)), (b, y.map(Some)));
