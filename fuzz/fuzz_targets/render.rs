@@ -9,7 +9,11 @@
 //! `Undefined(name)` for an object whose interval over the whole bounds
 //! is empty; no depth is NaN; neither guaranteed method misses a ray on
 //! which point sampling found f <= 0; and beam and pixel draw exactly the
-//! same hit mask. Each render must also finish within a time bound: a
+//! same hit mask. An IAA render (depth 2, threshold 1/4, so that pixels
+//! split by shading alone are refined in their proven brackets) keeps
+//! surface wherever the beam render's centre ray hit, has finite colours
+//! and coverages in [0, 1]. Each render must also finish within a time
+//! bound: a
 //! 16×16 image that takes seconds is a hang in the making (libFuzzer's
 //! own timeout is much longer).
 
@@ -19,7 +23,7 @@ use std::time::{Duration, Instant};
 
 use ibeam::eval::{EvalKind, Evaluator, build_evaluators};
 use ibeam::interval::Interval;
-use ibeam::render::{Method, RenderError, RenderOptions, RenderOutput, render};
+use ibeam::render::{Aa, Method, RenderError, RenderOptions, RenderOutput, render, render_aa};
 use libfuzzer_sys::fuzz_target;
 
 /// Longest one 16×16 render may take. Generous: the build is
@@ -189,7 +193,7 @@ fn scene_source(c: &mut Choices) -> String {
 fn timed(
     scene: &ibeam::scene::Scene,
     evals: &[std::sync::Arc<dyn Evaluator>],
-    method: Method,
+    (method, aa): (Method, Aa),
     text: &str,
 ) -> Result<RenderOutput, RenderError> {
     let opts = RenderOptions {
@@ -200,11 +204,14 @@ fn timed(
         ..RenderOptions::new(16, 16)
     };
     let start = Instant::now();
-    let out = render(scene, evals, &opts);
+    let out = match aa {
+        Aa::None => render(scene, evals, &opts),
+        _ => render_aa(scene, evals, &opts, aa),
+    };
     let took = start.elapsed();
     assert!(
         took <= TIME_BOUND,
-        "{method:?} render took {took:?} (bound {TIME_BOUND:?})\n{text}"
+        "{method:?} {aa:?} render took {took:?} (bound {TIME_BOUND:?})\n{text}"
     );
     out
 }
@@ -222,7 +229,7 @@ fuzz_target!(|data: &[u8]| {
         }
     };
     let evals = build_evaluators(&scene, EvalKind::Jit).expect("JIT accepts valid IR");
-    let beam = match timed(&scene, &evals, Method::Beam, &text) {
+    let beam = match timed(&scene, &evals, (Method::Beam, Aa::None), &text) {
         Ok(out) => out,
         Err(RenderError::Undefined(name)) => {
             // Only an object proven undefined on the whole bounds may be
@@ -235,13 +242,18 @@ fuzz_target!(|data: &[u8]| {
         }
         Err(e) => panic!("beam: {e}\n{text}"),
     };
-    let pixel = timed(&scene, &evals, Method::Pixel, &text)
+    let pixel = timed(&scene, &evals, (Method::Pixel, Aa::None), &text)
         .unwrap_or_else(|e| panic!("pixel failed where beam rendered: {e}\n{text}"));
     for (k, &t) in beam.depth_t.iter().chain(&pixel.depth_t).enumerate() {
         assert!(!t.is_nan(), "NaN depth at {k}\n{text}");
     }
-    let march = timed(&scene, &evals, Method::Point { steps: 200 }, &text)
-        .unwrap_or_else(|e| panic!("point failed where beam rendered: {e}\n{text}"));
+    let march = timed(
+        &scene,
+        &evals,
+        (Method::Point { steps: 200 }, Aa::None),
+        &text,
+    )
+    .unwrap_or_else(|e| panic!("point failed where beam rendered: {e}\n{text}"));
     // Point sampling finds real points with f <= 0; a guaranteed method
     // may not miss such a ray.
     for (name, out) in [("beam", &beam), ("pixel", &pixel)] {
@@ -257,4 +269,22 @@ fuzz_target!(|data: &[u8]| {
         .filter(|&k| beam.hit_mask[k] != pixel.hit_mask[k])
         .collect();
     assert!(diff.is_empty(), "beam and pixel differ at {diff:?}\n{text}");
+    let aa = Aa::Iaa {
+        threshold: 0.25,
+        depth: 2,
+    };
+    let iaa = timed(&scene, &evals, (Method::Beam, aa), &text)
+        .unwrap_or_else(|e| panic!("IAA failed where beam rendered: {e}\n{text}"));
+    for k in 0..iaa.coverage.len() {
+        let c = iaa.coverage[k];
+        assert!((0.0..=1.0).contains(&c), "coverage {c} at {k}\n{text}");
+        assert!(
+            !beam.hit_mask[k] || c > 0.0,
+            "IAA lost the centre ray's surface at {k}\n{text}"
+        );
+        assert!(
+            iaa.linear[k].iter().all(|v| v.is_finite()),
+            "IAA colour at {k}\n{text}"
+        );
+    }
 });

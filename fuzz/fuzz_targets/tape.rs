@@ -152,7 +152,13 @@ fuzz_target!(|data: &[u8]| {
         );
     }
     // Gradients of the whole batch in one pass: each point's own bits.
-    let mut grads = vec![ibeam::eval::Grad { v: 0.0, d: [0.0; 3] }; pts.len()];
+    let mut grads = vec![
+        ibeam::eval::Grad {
+            v: 0.0,
+            d: [0.0; 3]
+        };
+        pts.len()
+    ];
     tape.point_grad_batch([&cols[0], &cols[1], &cols[2]], &mut grads, &mut ws);
     for (p, g) in pts.iter().zip(&grads) {
         let w = whole.point_grad(*p);
