@@ -43,8 +43,9 @@ pub(crate) struct TileSpec<'m> {
 }
 
 /// A bracket proven to hold the first root of every ray of a beam (IAA's
-/// pixel-area inclusion test, for the sub-samples of a pixel split by
-/// shading alone): every object is positive along the rays before `a`;
+/// pixel-area inclusion test, for the sub-samples of an included pixel
+/// split by shading or on a shadow edge): every object is positive along
+/// the rays before `a`;
 /// over the beam's hull on `[a, b]`, inside the bounds, object `obj`
 /// alone may vanish, its cross-section is positive at `a` and negative at
 /// `b`, and it decreases strictly along every ray. So each ray's first
