@@ -68,6 +68,17 @@ pub trait Evaluator: Send + Sync {
         None
     }
 
+    /// The evaluator that answers derivatives over `b` when that is not
+    /// this one (a tree of regions pruned differently), to take every
+    /// value of a formula that combines several (a centred form: a value
+    /// at a point of `b` and a derivative over `b`) from one function.
+    /// Regions pruned to keep only signs ([`tape::Keep::Signs`]) agree in
+    /// sign, not in value, and such a formula over values from two of
+    /// them would bound neither.
+    fn answering(&self, _b: &[Interval; 3]) -> Option<&dyn Evaluator> {
+        None
+    }
+
     /// The evaluator as a tree of pruned regions, if it is one.
     fn as_regional(&self) -> Option<&regional::Regional> {
         None

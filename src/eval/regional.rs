@@ -2,9 +2,13 @@
 //! [`crate::eval::tape`] and [`crate::ir::prune`]) for points and boxes
 //! inside that region, and with its parent everywhere else.
 //!
-//! The pruned tape gives the same bits as the whole function on its region,
-//! so the choice is invisible in point values; intervals over boxes inside
-//! the region come out tighter. Regions nest two ways:
+//! A tape pruned by value gives the same bits as the whole function on its
+//! region, so the choice is invisible in point values; intervals over boxes
+//! inside the region come out tighter. The renderer's tapes keep only the
+//! sign ([`crate::eval::tape::Keep::Signs`]): every region then agrees on
+//! where the function is negative, zero or positive, but not on its value
+//! off the surface, and a formula that combines a value with a derivative
+//! takes both from [`Evaluator::answering`]. Regions nest two ways:
 //! - the parent is the evaluator the tape was pruned from (a tile's, whose
 //!   parent is the whole function's), so an evaluation just outside a
 //!   block's region still runs the tile's short tape, not the whole
@@ -293,6 +297,11 @@ impl Evaluator for Regional {
 
     fn as_regional(&self) -> Option<&Regional> {
         Some(self)
+    }
+
+    fn answering(&self, b: &[Interval; 3]) -> Option<&dyn Evaluator> {
+        let e = self.for_derivatives(b);
+        Some(e.answering(b).unwrap_or(e))
     }
 }
 

@@ -178,6 +178,37 @@ pub fn decided_operand(op: BinaryOp, x: (Interval, Facts), y: (Interval, Facts))
     }
 }
 
+/// The operand (0 or 1) that `op` (`min` or `max`) may be replaced by on a
+/// box where only the sign of its value matters (see
+/// [`crate::eval::tape::Keep::Signs`]): the other operand is proven
+/// defined and positive there (for `min`) or negative (for `max`), so the
+/// node and the kept operand have the same sign, and are NaN together
+/// (`min` and `max` return NaN for a NaN operand), at every point of the
+/// box. A defined value is contained in its interval (only undefined
+/// operations break containment).
+#[inline]
+pub fn sign_decided_operand(
+    op: BinaryOp,
+    x: (Interval, Facts),
+    y: (Interval, Facts),
+) -> Option<usize> {
+    let beyond = |v: (Interval, Facts)| {
+        v.1.defined
+            && match op {
+                BinaryOp::Min => v.0.lo > 0.0,
+                BinaryOp::Max => v.0.hi < 0.0,
+                _ => false,
+            }
+    };
+    if beyond(y) {
+        Some(0)
+    } else if beyond(x) {
+        Some(1)
+    } else {
+        None
+    }
+}
+
 /// `f` restricted to the box `b` (see the module docs); `None` when no
 /// `min`/`max` node is decided there.
 pub fn prune(f: &Function, b: [Interval; 3]) -> Option<Pruned> {

@@ -256,7 +256,11 @@ fn centred(
     (a, b): (f64, f64),
     st: &mut RenderStats,
 ) -> Centred {
-    let [_, dfdt] = tr.interval_dir(k, bx, ray.d, st);
+    // F at the midpoint and dF/dt over the piece from one function (see
+    // `Evaluator::answering`).
+    let e = tr.answering(k, &bx);
+    st.interval_evals += 1;
+    let [_, dfdt] = e.interval_dir(bx, ray.d);
     let mut c = Centred {
         positive: false,
         dfdt,
@@ -266,7 +270,8 @@ fn centred(
         return c;
     }
     let m = 0.5 * (a + b);
-    let fm = tr.interval(k, ray_box(ray.o, ray.d, Interval::point(m)), st);
+    st.interval_evals += 1;
+    let fm = e.interval(ray_box(ray.o, ray.d, Interval::point(m)));
     c.fm = Some(fm);
     if fm.is_empty() {
         return c;

@@ -178,7 +178,7 @@ impl<'a> Tracer<'a> {
                     PRUNE_MIN_OPS
                 };
                 let f = e.function().filter(|_| prune && n >= least)?;
-                Some(Arc::new(Tape::new(f)))
+                Some(Arc::new(Tape::new(f).keeping_signs()))
             })
             .collect();
         let large = live_ops.iter().any(|&n| n >= PRUNE_MIN_OPS);
@@ -404,11 +404,15 @@ impl<'a> Tracer<'a> {
             return f;
         }
         let c: [f64; 3] = b.map(|i| i.mid());
-        let g = self.interval_grad(k, b, &mut st.stats);
+        // The centre's value and the gradient from one function (see
+        // `Evaluator::answering`).
+        let e = self.answering(k, &b);
+        st.stats.interval_evals += 2;
+        let g = e.interval_grad(b);
         if !g.d.iter().all(|d| d.lo.is_finite() && d.hi.is_finite()) {
             return f;
         }
-        let fc = self.interval(k, point_box(c), &mut st.stats);
+        let fc = e.interval(point_box(c));
         if fc.is_empty() || !fc.lo.is_finite() || !fc.hi.is_finite() {
             return f;
         }
@@ -422,6 +426,14 @@ impl<'a> Tracer<'a> {
         st.stats.mean_value_wins += u64::from(win);
         st.mean_value.record(level, win);
         if lo <= hi { Interval::new(lo, hi) } else { f }
+    }
+
+    /// What evaluates object `k` over `b` and at the points of `b` with
+    /// one function (see [`Evaluator::answering`]), for formulas that
+    /// combine values from several evaluations.
+    pub(crate) fn answering(&self, k: usize, b: &IBox) -> &dyn Evaluator {
+        let e = self.evals[k].as_ref();
+        e.answering(b).unwrap_or(e)
     }
 
     /// Object `k` and its gradient over `b`.

@@ -1,6 +1,7 @@
 //! Functions with jumps and the new shape operators, end to end: the
 //! examples that use them render with beam and pixel drawing the same
-//! pixels, the JIT and the interpreter the same image, and nothing a dense
+//! pixels, the JIT and the interpreter the same hit mask (colours within
+//! 2/255), and nothing a dense
 //! point march finds is missed; a staircase `y - floor(…)` draws its
 //! risers as walls (the boundary of {f < 0}).
 
@@ -21,7 +22,22 @@ fn examples_with_jumps_and_new_operators() {
         assert_covers_march(name, &scene, &got, w, h);
         let interp = render_by(&scene, &interp_evaluators(&scene), w, h, Method::Beam);
         assert_eq!(got.hit_mask, interp.hit_mask, "{name}: jit vs interp mask");
-        assert_eq!(got.image, interp.image, "{name}: jit vs interp pixels");
+        // Colours within 2/255: the renderer prunes interpreted functions
+        // from 64 ops and native ones from 512, keeping signs only
+        // (`Keep::Signs`), so a root may be refined on another function
+        // with the same zero set and land a rounding step away.
+        let worst = got
+            .image
+            .as_raw()
+            .iter()
+            .zip(interp.image.as_raw())
+            .map(|(a, b)| a.abs_diff(*b))
+            .max()
+            .unwrap_or(0);
+        assert!(
+            worst <= 2,
+            "{name}: jit vs interp colours differ by {worst}"
+        );
     }
 }
 

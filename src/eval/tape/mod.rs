@@ -31,7 +31,8 @@ use std::sync::Arc;
 use crate::eval::interp::IntervalDual;
 use crate::interval::Interval;
 use crate::ir::prune::{
-    Facts, binary_facts, const_facts, decided_operand, powi_facts, unary_facts, var_facts,
+    Facts, binary_facts, const_facts, decided_operand, powi_facts, sign_decided_operand,
+    unary_facts, var_facts,
 };
 use crate::ir::semantics::{interval_binary, interval_unary};
 use crate::ir::{BinaryOp, Function, Op, UnaryOp, ValueId, Var};
@@ -148,6 +149,24 @@ pub struct Tape {
     ssa: Arc<Function>,
     code: Vec<Instr>,
     registers: usize,
+    // What its pruned children keep; under `Keep::Signs`, which ops reach
+    // the root through `min`/`max` alone (empty under `Keep::Bits`).
+    keep: Keep,
+    sign_only: Vec<bool>,
+}
+
+/// What a tape pruned to a box keeps of its parent there.
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
+pub enum Keep {
+    /// Every value, bit for bit: the contract of [`crate::ir::prune`].
+    #[default]
+    Bits,
+    /// The root's sign at every point of the box (negative, zero,
+    /// positive or NaN), and bit for bit every value the root's sign
+    /// depends on through more than `min`/`max`. A ray tracer needs no
+    /// more: the surface and the solid are where the root is zero and
+    /// negative. See [`Tape::keeping_signs`].
+    Signs,
 }
 
 /// Per-thread scratch space for batch evaluation: one column of the batch
@@ -209,7 +228,45 @@ impl Tape {
         let ssa = Function { ops, root };
         let (mut live, mut order) = (Vec::new(), Vec::new());
         liveness(&ssa, &identity, &mut live, &mut order);
-        Tape::write_child(&ssa, &identity, &order, &mut ChildScratch::default())
+        Tape::write_child(
+            &ssa,
+            Keep::Bits,
+            &identity,
+            &order,
+            &mut ChildScratch::default(),
+        )
+    }
+
+    /// The same tape, whose prunings (and theirs, nested) keep only the
+    /// root's sign on their box ([`Keep::Signs`]).
+    ///
+    /// A `min(a, b)` that only `min`/`max` ops lie between it and the root
+    /// (a union, directly or inside an intersection) is replaced by `a`
+    /// over a box where `b` is proven positive and defined: at every
+    /// point there, `min(a, b)` and `a` have the same sign (and are NaN
+    /// together), and the sign of a `min` or `max` of two values depends
+    /// only on their signs, so the root keeps its sign. Likewise a `max`
+    /// whose other operand is proven negative. Value pruning
+    /// ([`Keep::Bits`]) drops `b` only where it is proven above `a`; over
+    /// a long box through a union of many small objects every object's
+    /// interval overlaps the nearest one's, and nearly nothing is dropped,
+    /// while every object that misses the box is proven positive on it.
+    ///
+    /// What changes is the root's value off its zero set, so what
+    /// combines values from several evaluations must take them from one
+    /// tape (see [`crate::eval::Evaluator::answering`]); intervals over a
+    /// box inside the pruned one hold 0, or lie above or below it,
+    /// exactly when the whole function's do (`min` and `max` are monotone
+    /// and keep their operands' signs).
+    pub fn keeping_signs(mut self) -> Tape {
+        self.sign_only = sign_only_ops(&self.ssa);
+        self.keep = Keep::Signs;
+        self
+    }
+
+    /// What the tape's prunings keep.
+    pub fn keeps(&self) -> Keep {
+        self.keep
     }
 
     /// The ops as a function (its root is the last op).
@@ -275,10 +332,13 @@ impl Tape {
             fixed_registers(&mut ws.intervals, self.registers, zero),
             fixed_registers(&mut ws.facts, self.registers, Facts::default()),
         ) {
-            (Some(regs), Some(fact)) => prune_pass(&self.code, ops, b, (regs, fact), alias),
+            (Some(regs), Some(fact)) => {
+                prune_pass(&self.code, ops, &self.sign_only, b, (regs, fact), alias)
+            }
             _ => prune_pass(
                 &self.code,
                 ops,
+                &self.sign_only,
                 b,
                 (&mut ws.intervals[..], &mut ws.facts[..]),
                 alias,
@@ -293,7 +353,7 @@ impl Tape {
             return None;
         }
         Some(PrunedTape {
-            tape: Tape::write_child(&self.ssa, alias, &ws.order, &mut ws.child),
+            tape: Tape::write_child(&self.ssa, self.keep, alias, &ws.order, &mut ws.child),
             decided,
         })
     }
@@ -340,7 +400,7 @@ impl Tape {
             fact: &mut facts[..cells],
             lanes,
         };
-        lanes_pass.run(&self.code, ops, boxes, picks);
+        lanes_pass.run((&self.code, ops, &self.sign_only), boxes, picks);
         // Each box's child, written from its picks through one alias
         // table that is the identity between boxes.
         alias.clear();
@@ -356,7 +416,7 @@ impl Tape {
                 }
                 let kept = liveness(&self.ssa, alias, live, order);
                 let written = (kept <= max_len).then(|| PrunedTape {
-                    tape: Tape::write_child(&self.ssa, alias, order, child),
+                    tape: Tape::write_child(&self.ssa, self.keep, alias, order, child),
                     decided: p.len(),
                 });
                 for &(k, _) in p.iter() {
@@ -376,6 +436,7 @@ impl Tape {
     /// passes over every parent op were most of this function's time.
     fn write_child(
         parent: &Function,
+        keep: Keep,
         alias: &[usize],
         order: &[u32],
         scratch: &mut ChildScratch,
@@ -445,15 +506,44 @@ impl Tape {
             ops[at] = op;
             code[at] = instr;
         }
+        let ssa = Function {
+            ops,
+            root: index[root],
+        };
+        let sign_only = match keep {
+            Keep::Bits => Vec::new(),
+            Keep::Signs => sign_only_ops(&ssa),
+        };
         Tape {
-            ssa: Arc::new(Function {
-                ops,
-                root: index[root],
-            }),
+            ssa: Arc::new(ssa),
             code,
             registers: registers as usize,
+            keep,
+            sign_only,
         }
     }
+}
+
+/// Per op of `f`: whether the root's sign is all that depends on its value,
+/// that is, it is the root or every op reading it is such a `min` or `max`
+/// (the ops [`Keep::Signs`] may replace by one operand). Walking backwards,
+/// every reader of an op is met before it.
+fn sign_only_ops(f: &Function) -> Vec<bool> {
+    let n = f.ops.len();
+    let root = f.root.index();
+    let mut read = vec![false; n];
+    let mut read_by_value = vec![false; n];
+    let mut sign_only = vec![false; n];
+    for k in (0..n).rev() {
+        let only = (k == root || read[k]) && !read_by_value[k];
+        sign_only[k] = only;
+        let passes_sign = only && matches!(f.ops[k], Op::Binary(BinaryOp::Min | BinaryOp::Max, ..));
+        for a in f.ops[k].operands() {
+            read[a.index()] = true;
+            read_by_value[a.index()] |= !passes_sign;
+        }
+    }
+    sign_only
 }
 
 /// Marks in `live` the ops of `f` its root reads through `alias` (an op
@@ -519,6 +609,7 @@ fn depth_first(f: &Function) -> Vec<usize> {
 fn prune_pass<V: Registers<Interval> + ?Sized, F: Registers<Facts> + ?Sized>(
     code: &[Instr],
     ops: &[Op],
+    sign_only: &[bool],
     b: [Interval; 3],
     (regs, fact): (&mut V, &mut F),
     alias: &mut [usize],
@@ -539,8 +630,14 @@ fn prune_pass<V: Registers<Interval> + ?Sized, F: Registers<Facts> + ?Sized>(
             Instr::Add(o, x, y) => binary(o, BinaryOp::Add, at(x), at(y), Interval::add),
             Instr::Sub(o, x, y) => binary(o, BinaryOp::Sub, at(x), at(y), Interval::sub),
             Instr::Mul(o, x, y) => binary(o, BinaryOp::Mul, at(x), at(y), Interval::mul),
-            Instr::Min(o, x, y) => binary(o, BinaryOp::Min, at(x), at(y), Interval::min),
-            Instr::Max(o, x, y) => binary(o, BinaryOp::Max, at(x), at(y), Interval::max),
+            Instr::Min(o, x, y) => {
+                let signs = sign_only.get(k) == Some(&true);
+                choice(o, BinaryOp::Min, (at(x), at(y)), signs, Interval::min)
+            }
+            Instr::Max(o, x, y) => {
+                let signs = sign_only.get(k) == Some(&true);
+                choice(o, BinaryOp::Max, (at(x), at(y)), signs, Interval::max)
+            }
             Instr::Binary(o, op, x, y) => {
                 binary(o, op, at(x), at(y), |p, q| interval_binary_inline(op, p, q))
             }
@@ -582,7 +679,12 @@ impl LanesPass<'_> {
     // Runs `code` (the instructions of `ops`) over `boxes`, pushing each
     // box's decided `min`/`max` ops, with the operand each picks, to its
     // list in `picks`.
-    fn run(mut self, code: &[Instr], ops: &[Op], boxes: &[[Interval; 3]], picks: &mut [Picks]) {
+    fn run(
+        mut self,
+        (code, ops, sign_only): (&[Instr], &[Op], &[bool]),
+        boxes: &[[Interval; 3]],
+        picks: &mut [Picks],
+    ) {
         // One dispatch per instruction, then a loop over the boxes with
         // the op fixed (see `prune_pass`).
         for (k, instr) in code.iter().enumerate() {
@@ -603,10 +705,24 @@ impl LanesPass<'_> {
                 Instr::Sub(o, x, y) => self.binary(o, [x, y], BinaryOp::Sub, Interval::sub),
                 Instr::Mul(o, x, y) => self.binary(o, [x, y], BinaryOp::Mul, Interval::mul),
                 Instr::Min(o, x, y) => {
-                    self.choice(o, [x, y], BinaryOp::Min, Interval::min, (k, ops, picks))
+                    let signs = sign_only.get(k) == Some(&true);
+                    self.choice(
+                        o,
+                        [x, y],
+                        (BinaryOp::Min, signs),
+                        Interval::min,
+                        (k, ops, picks),
+                    )
                 }
                 Instr::Max(o, x, y) => {
-                    self.choice(o, [x, y], BinaryOp::Max, Interval::max, (k, ops, picks))
+                    let signs = sign_only.get(k) == Some(&true);
+                    self.choice(
+                        o,
+                        [x, y],
+                        (BinaryOp::Max, signs),
+                        Interval::max,
+                        (k, ops, picks),
+                    )
                 }
                 Instr::Binary(o, op, x, y) => {
                     self.binary(o, [x, y], op, |p, q| interval_binary_inline(op, p, q))
@@ -664,13 +780,14 @@ impl LanesPass<'_> {
     }
 
     // A `min` or `max` at op `k` of `ops`: as `binary`, and the operand
-    // it picks on each box where one is proven.
+    // it picks on each box where one is proven (by value, or by sign where
+    // `signs`: see `Keep::Signs`).
     #[inline(always)]
     fn choice(
         &mut self,
         o: Reg,
         [x, y]: [Reg; 2],
-        op: BinaryOp,
+        (op, signs): (BinaryOp, bool),
         value: impl Fn(Interval, Interval) -> Interval,
         (k, ops, picks): (usize, &[Op], &mut [Picks]),
     ) {
@@ -679,7 +796,9 @@ impl LanesPass<'_> {
         };
         for (j, p) in picks.iter_mut().enumerate() {
             let (a, b) = (self.at(x, j), self.at(y, j));
-            if let Some(w) = decided_operand(op, a, b) {
+            let pick = decided_operand(op, a, b)
+                .or_else(|| signs.then(|| sign_decided_operand(op, a, b)).flatten());
+            if let Some(w) = pick {
                 p.push((k as u32, [xa, ya][w].0));
             }
             let v = value(a.0, b.0);
@@ -717,6 +836,23 @@ fn binary(
     } else {
         None
     };
+    let v = value(x.0, y.0);
+    (o, v, binary_facts(op, x, y, v), pick)
+}
+
+/// One step of pruning's forward pass over a `min` or `max` written to
+/// `o`: as [`binary`], deciding by sign too where `signs` (the op reaches
+/// the root through `min`/`max` alone on a tape that keeps signs).
+#[inline(always)]
+fn choice(
+    o: Reg,
+    op: BinaryOp,
+    (x, y): ((Interval, Facts), (Interval, Facts)),
+    signs: bool,
+    value: impl Fn(Interval, Interval) -> Interval,
+) -> (Reg, Interval, Facts, Option<usize>) {
+    let pick = decided_operand(op, x, y)
+        .or_else(|| signs.then(|| sign_decided_operand(op, x, y)).flatten());
     let v = value(x.0, y.0);
     (o, v, binary_facts(op, x, y, v), pick)
 }

@@ -329,3 +329,122 @@ fn tapes_past_the_fixed_register_file_give_the_interpreters_bits() {
         }
     }
 }
+
+fn sign(v: f64) -> i8 {
+    if v.is_nan() {
+        2
+    } else if v < 0.0 {
+        -1
+    } else if v > 0.0 {
+        1
+    } else {
+        0
+    }
+}
+
+// The sign class of an interval's ends (what "the interval holds 0, lies
+// above or below it" reads).
+fn sign_class(i: Interval) -> (i8, i8) {
+    if i.is_empty() {
+        (2, 2)
+    } else {
+        (sign(i.lo), sign(i.hi))
+    }
+}
+
+// A union of spheres pruned to a box that two of them reach keeps only
+// those two by sign, where pruning by value keeps nearly all: the far
+// spheres' intervals overlap the near ones' over a long box.
+#[test]
+fn pruning_by_sign_keeps_only_the_objects_that_reach_the_box() {
+    let f = spheres(200);
+    let mut ws = Workspace::default();
+    // Along x over spheres 40..=47, thin across: the spheres at 44 and 45
+    // reach it (|y|, |z| <= 0.1 < 0.5 at x = 44, 45), the rest are proven
+    // positive there only where x is far from them.
+    let long = [
+        Interval::new(44.2, 45.3),
+        Interval::new(-0.1, 0.1),
+        Interval::new(-0.1, 0.1),
+    ];
+    let by_value = Tape::new(&f).prune(long, &mut ws).expect("prunes");
+    let by_sign = Tape::new(&f)
+        .keeping_signs()
+        .prune(long, &mut ws)
+        .expect("prunes");
+    assert_eq!(by_sign.tape.keeps(), Keep::Signs);
+    let sqrts = |t: &Tape| {
+        t.code()
+            .iter()
+            .filter(|i| matches!(i, Instr::Sqrt(..)))
+            .count()
+    };
+    assert_eq!(sqrts(&by_sign.tape), 2, "{:?}", by_sign.tape.function());
+    assert!(sqrts(&by_value.tape) >= 2);
+    // Pruned again inside, the child keeps signs too.
+    let inner = [
+        Interval::new(44.2, 44.4),
+        Interval::new(-0.1, 0.1),
+        Interval::new(-0.1, 0.1),
+    ];
+    let nested = by_sign.tape.prune(inner, &mut ws).expect("prunes again");
+    assert_eq!(sqrts(&nested.tape), 1);
+    assert_eq!(nested.tape.keeps(), Keep::Signs);
+}
+
+// On random functions and boxes, a tape pruned by sign (nested twice) has
+// the whole function's sign at every sampled point of its box, and its
+// intervals over sub-boxes hold 0, or lie above or below it, exactly when
+// the whole function's do; every value the root reads through more than
+// min/max is untouched, so functions without a min/max at the top keep
+// their bits.
+#[test]
+fn pruning_by_sign_keeps_the_sign_in_the_box() {
+    let mut rng = Rng::new(31);
+    let mut ws = Workspace::default();
+    let (mut pruned, mut shorter) = (0, 0);
+    for seed in 0..600 {
+        let f = random_function(seed, 9);
+        let whole = Tape::new(&f).keeping_signs();
+        let bx = random_box(&mut rng, 2.0);
+        let Some(p) = whole.prune(bx, &mut ws) else {
+            continue;
+        };
+        crate::ir::validate::validate(p.tape.function()).unwrap();
+        pruned += 1;
+        let by_value = Tape::new(&f).prune(bx, &mut ws);
+        if by_value.is_none_or(|v| v.tape.len() > p.tape.len()) {
+            shorter += 1;
+        }
+        // A sub-box, pruned again from the child.
+        let sub: [Interval; 3] = std::array::from_fn(|c| {
+            let (a, b) = (rng.range(bx[c].lo, bx[c].hi), rng.range(bx[c].lo, bx[c].hi));
+            Interval::new(a.min(b), a.max(b))
+        });
+        let nested = p.tape.prune(sub, &mut ws).map(|q| q.tape);
+        let it = Interpreter::new(f);
+        for (tape, region) in [(Some(&p.tape), bx), (nested.as_ref(), sub)] {
+            let Some(tape) = tape else { continue };
+            for _ in 0..16 {
+                let q: [f64; 3] = std::array::from_fn(|c| rng.range(region[c].lo, region[c].hi));
+                let v = tape.point(q, &mut ws);
+                assert_eq!(sign(v), sign(it.point(q)), "seed {seed} at {q:?}");
+                let small: [Interval; 3] = std::array::from_fn(|c| {
+                    let w = 0.1 * region[c].width();
+                    let lo = (q[c] - w).max(region[c].lo);
+                    Interval::new(lo, (q[c] + w).min(region[c].hi).max(lo))
+                });
+                assert_eq!(
+                    sign_class(tape.interval(small, &mut ws)),
+                    sign_class(it.interval(small)),
+                    "seed {seed} over {small:?}"
+                );
+            }
+        }
+    }
+    assert!(pruned > 40, "only {pruned} random functions pruned");
+    assert!(
+        shorter > 5,
+        "sign pruning shorter than value pruning {shorter} times"
+    );
+}
