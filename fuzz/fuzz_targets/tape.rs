@@ -15,7 +15,11 @@
 //! - a tape pruned to a box from the bytes, and that pruned tape pruned
 //!   again to a sub-box (pruning nests), is valid IR and gives the same
 //!   point bits as the whole function at the corners, the centre and
-//!   points sampled in its box (faces hit often, where rounding decides).
+//!   points sampled in its box (faces hit often, where rounding decides);
+//! - the same with a tape that keeps signs only (`Tape::keeping_signs`):
+//!   the pruned and nested tapes give the whole function's sign (negative,
+//!   zero, positive or NaN) at those points, and batched pruning writes
+//!   each box's own tape.
 //!
 //! Bytes: 0..8 seed, 8 depth, 9 flags (bit 0: simplify), 10..16 the outer
 //! box (two bytes a side), 16..22 the sub-box (fractions of the outer
@@ -25,7 +29,7 @@
 
 use ibeam::eval::Evaluator;
 use ibeam::eval::interp::Interpreter;
-use ibeam::eval::tape::{Tape, Workspace};
+use ibeam::eval::tape::{Keep, Tape, Workspace};
 use ibeam::interval::Interval;
 use ibeam::ir::passes;
 use ibeam::ir::random::{Rng, random_function};
@@ -77,7 +81,22 @@ fn sub_side(outer: Interval, a: u8, b: u8) -> Interval {
     Interval::new(at(s), at(t).max(at(s)))
 }
 
-/// Checks a pruned tape against the whole function at points of `b`.
+/// The sign class of a point value: NaN, negative, zero (either sign) or
+/// positive.
+fn sign(v: f64) -> i8 {
+    if v.is_nan() {
+        2
+    } else if v < 0.0 {
+        -1
+    } else if v > 0.0 {
+        1
+    } else {
+        0
+    }
+}
+
+/// Checks a pruned tape against the whole function at points of `b`: the
+/// same bits, or the same sign where the tape keeps signs only.
 fn check_points(whole: &Interpreter, tape: &Tape, b: [Interval; 3], rng: &mut Rng, what: &str) {
     let corners =
         (0..8).map(|k| std::array::from_fn(|i| if k >> i & 1 == 0 { b[i].lo } else { b[i].hi }));
@@ -100,8 +119,12 @@ fn check_points(whole: &Interpreter, tape: &Tape, b: [Interval; 3], rng: &mut Rn
     tape.point_batch([&cols[0], &cols[1], &cols[2]], &mut out, &mut ws);
     for (p, v) in pts.iter().zip(&out) {
         let w = whole.point(*p);
+        let agree = match tape.keeps() {
+            Keep::Bits => same(w, *v),
+            Keep::Signs => sign(w) == sign(*v),
+        };
         assert!(
-            same(w, *v),
+            agree,
             "{what} at {p:?} in {b:?}: whole {w:e}, pruned {v:e}"
         );
     }
@@ -218,8 +241,34 @@ fuzz_target!(|data: &[u8]| {
         assert!(same_tape, "batched pruning over {b:?} differs ({ctx})");
     }
 
-    // (b) pruning, and pruning the pruned tape again.
+    // (b) pruning, and pruning the pruned tape again, keeping bits, then
+    // (c) keeping signs.
     let mut rng = Rng::new(seed ^ u64::from_le_bytes([data[8], data[9], 0, 0, 0, 0, 0, 1]));
+    check_nested(&whole, &tape, (outer, inner), &mut rng, &ctx);
+    let signs = tape.clone().keeping_signs();
+    let batch = signs.prune_batch(&boxes, usize::MAX, &mut ws);
+    for (b, got) in boxes.iter().zip(&batch) {
+        let alone = signs.prune(*b, &mut ws);
+        let same_tape = match (got, &alone) {
+            (Some(g), Some(a)) => g.tape == a.tape && g.decided == a.decided,
+            (None, None) => true,
+            _ => false,
+        };
+        assert!(same_tape, "batched sign pruning over {b:?} differs ({ctx})");
+    }
+    check_nested(&whole, &signs, (outer, inner), &mut rng, &ctx);
+});
+
+/// `tape` pruned to `outer`, and that pruned to `inner`: valid, never
+/// longer, and agreeing with `whole` (see `check_points`) on each box.
+fn check_nested(
+    whole: &Interpreter,
+    tape: &Tape,
+    (outer, inner): ([Interval; 3], [Interval; 3]),
+    rng: &mut Rng,
+    ctx: &str,
+) {
+    let mut ws = Workspace::default();
     let Some(p1) = tape.prune(outer, &mut ws) else {
         return;
     };
@@ -232,22 +281,10 @@ fuzz_target!(|data: &[u8]| {
         p1.tape.len(),
         tape.len()
     );
-    check_points(
-        &whole,
-        &p1.tape,
-        outer,
-        &mut rng,
-        &format!("pruned ({ctx})"),
-    );
+    check_points(whole, &p1.tape, outer, rng, &format!("pruned ({ctx})"));
     let Some(p2) = p1.tape.prune(inner, &mut ws) else {
         // Nothing more decided: the outer tape must still be exact there.
-        check_points(
-            &whole,
-            &p1.tape,
-            inner,
-            &mut rng,
-            &format!("outer in inner ({ctx})"),
-        );
+        check_points(whole, &p1.tape, inner, rng, &format!("outer in inner ({ctx})"));
         return;
     };
     if let Err(e) = validate(p2.tape.function()) {
@@ -260,10 +297,10 @@ fuzz_target!(|data: &[u8]| {
         p1.tape.len()
     );
     check_points(
-        &whole,
+        whole,
         &p2.tape,
         inner,
-        &mut rng,
+        rng,
         &format!("nested in {outer:?} ({ctx})"),
     );
-});
+}
