@@ -162,7 +162,9 @@ const ALONG_Z: &str = "eye = (0, 0, 3); target = (0, 0, 0); ortho = 0.5;";
 /// of about 650 ops, seen along z), a 3D union of 80 spheres seen in
 /// perspective (pruned per slice of each tile's beam and per block), a 3D
 /// union of 400 smaller ones seen along z (whose tiles' long slices share
-/// their group's tapes and whose short ones prune from the group's), the
+/// their group's tapes and whose short ones prune from the group's), 150
+/// spheres with 150 smaller ones cut out (a `difference`: pruning keeps
+/// signs through its negation), the
 /// prospero model (2D) and the colonnade model (3D) render the same hit
 /// mask and the same hit depths with and without it, and pruning did
 /// happen; the pixel method draws the same hit mask.
@@ -208,6 +210,33 @@ fn pruning_draws_what_the_whole_function_draws() {
             128,
         ),
     ];
+    // A carved union: spheres with smaller ones cut out of them
+    // (`difference` is `max(a, -b)`), whose cutters prune by sign through
+    // the negation too.
+    let carved = {
+        let solid = spheres_scene(150, 0.09, CORNER_VIEW, true);
+        let cut = spheres_scene(150, 0.06, CORNER_VIEW, true);
+        let body = |t: &str| {
+            t.split_once("union(")
+                .and_then(|(_, rest)| rest.split_once(");\n"))
+                .map(|(b, _)| b.to_string())
+                .unwrap()
+        };
+        // Other places for the cutters: the same generator, shifted.
+        let cutters = body(&cut).replace(
+            "translate(sphere(0.06), ",
+            "translate(sphere(0.06), 0.05 + ",
+        );
+        solid.replace(
+            &format!("union({});", body(&solid)),
+            &format!("difference(union({}), union({cutters}));", body(&solid)),
+        )
+    };
+    assert!(carved.contains("difference(union("), "{carved}");
+    scenes.push((
+        ibeam::lang::load_scene_source("carved.ib", &carved).unwrap(),
+        160,
+    ));
     // The community models, when ../shared is beside the checkout: prospero
     // (2D) and colonnade (3D, pruned per block near the surface).
     for model in ["prospero", "colonnade"] {

@@ -240,12 +240,14 @@ impl Tape {
     /// The same tape, whose prunings (and theirs, nested) keep only the
     /// root's sign on their box ([`Keep::Signs`]).
     ///
-    /// A `min(a, b)` that only `min`/`max` ops lie between it and the root
-    /// (a union, directly or inside an intersection) is replaced by `a`
+    /// A `min(a, b)` that only `min`/`max` ops and negations lie between it
+    /// and the root (a union, directly or inside an intersection or the
+    /// cut of a difference) is replaced by `a`
     /// over a box where `b` is proven positive and defined: at every
     /// point there, `min(a, b)` and `a` have the same sign (and are NaN
     /// together), and the sign of a `min` or `max` of two values depends
-    /// only on their signs, so the root keeps its sign. Likewise a `max`
+    /// only on their signs (a negation's on its operand's), so the root
+    /// keeps its sign. Likewise a `max`
     /// whose other operand is proven negative. Value pruning
     /// ([`Keep::Bits`]) drops `b` only where it is proven above `a`; over
     /// a long box through a union of many small objects every object's
@@ -525,9 +527,10 @@ impl Tape {
 }
 
 /// Per op of `f`: whether the root's sign is all that depends on its value,
-/// that is, it is the root or every op reading it is such a `min` or `max`
-/// (the ops [`Keep::Signs`] may replace by one operand). Walking backwards,
-/// every reader of an op is met before it.
+/// that is, it is the root or every op reading it is such a `min`, `max`
+/// or negation (the sign of each depends on its operands' signs alone).
+/// [`Keep::Signs`] may replace such a `min` or `max` by one operand.
+/// Walking backwards, every reader of an op is met before it.
 fn sign_only_ops(f: &Function) -> Vec<bool> {
     let n = f.ops.len();
     let root = f.root.index();
@@ -537,7 +540,13 @@ fn sign_only_ops(f: &Function) -> Vec<bool> {
     for k in (0..n).rev() {
         let only = (k == root || read[k]) && !read_by_value[k];
         sign_only[k] = only;
-        let passes_sign = only && matches!(f.ops[k], Op::Binary(BinaryOp::Min | BinaryOp::Max, ..));
+        // A negation passes its operand's sign on too (flipped): the cut
+        // of a `difference`, `max(a, -b)`, keeps signs only.
+        let passes_sign = only
+            && matches!(
+                f.ops[k],
+                Op::Binary(BinaryOp::Min | BinaryOp::Max, ..) | Op::Unary(UnaryOp::Neg, _)
+            );
         for a in f.ops[k].operands() {
             read[a.index()] = true;
             read_by_value[a.index()] |= !passes_sign;
