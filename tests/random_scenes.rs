@@ -10,7 +10,9 @@
 //! random points; IAA's covered pixels are hit by every sample.
 //!
 //! The generator is seeded from proptest's `u64`, so a failure prints the
-//! seed; `scene_source(seed)` rebuilds the scene text.
+//! seed; `scene_source(seed)` rebuilds the scene text. Every scene is also
+//! rendered with the interpreter, which prunes functions of 64 ops or more
+//! (keeping signs), against the march and the JIT's mask.
 
 mod common;
 
@@ -229,6 +231,25 @@ fn check_scene(seed: u64, text: &str, all_csg: bool, n: usize) {
     assert!(
         diff.is_empty(),
         "seed {seed}: beam and pixel differ at {diff:?}\n{text}"
+    );
+    // Interpreted, a function of 64 ops or more is pruned to each region,
+    // keeping only its sign (`Keep::Signs`): the beam must still find every
+    // ray the march hits, and draw what the unpruned JIT render draws.
+    opts.method = Method::Beam;
+    let pruned = render(&scene, &interp_evaluators(&scene), &opts).unwrap();
+    let missed: Vec<usize> = (0..pruned.hit_mask.len())
+        .filter(|&k| march.hit_mask[k] && !pruned.hit_mask[k])
+        .collect();
+    assert!(
+        missed.is_empty(),
+        "seed {seed}: interpreted beam misses march hits at {missed:?}\n{text}"
+    );
+    let diff: Vec<usize> = (0..beam.hit_mask.len())
+        .filter(|&k| beam.hit_mask[k] != pruned.hit_mask[k])
+        .collect();
+    assert!(
+        diff.is_empty(),
+        "seed {seed}: JIT and interpreted beams differ at {diff:?}\n{text}"
     );
 }
 
