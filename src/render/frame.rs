@@ -317,6 +317,7 @@ impl<'a> Frame<'a> {
                         floors: None,
                         shadow_hints: None,
                         brackets: None,
+                        mean_value: true,
                     };
                     let out = render_tile(tr, opts, spec, bg);
                     if s > 1 { downsample(out, s) } else { out }

@@ -143,6 +143,8 @@ pub(super) fn trace_split(
                 floors: Some(&starts),
                 shadow_hints: Some(&fine_hints),
                 brackets: Some(&fine_brackets),
+                // Too few blocks to learn whether the form pays.
+                mean_value: false,
             };
             (g, downsample(render_tile(fine, &fine_opts, spec, bg), f))
         })

@@ -125,6 +125,14 @@ pub(crate) struct MeanValuePolicy {
 }
 
 impl MeanValuePolicy {
+    /// A policy that never tries the form, as if it had lost every try at
+    /// every block size.
+    pub(crate) fn never() -> MeanValuePolicy {
+        MeanValuePolicy {
+            levels: [(MV_MIN_TRIES, 0); MV_LEVELS],
+        }
+    }
+
     /// Whether the form is still worth trying on blocks of class `level`.
     fn pays(&self, level: usize) -> bool {
         let (tries, wins) = self.levels[level.min(MV_LEVELS - 1)];
