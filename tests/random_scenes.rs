@@ -216,7 +216,7 @@ fn check_scene(seed: u64, text: &str, all_csg: bool, n: usize) {
     // method may miss such a ray.
     opts.method = Method::Point { steps: 200 };
     let march = render(&scene, &evals, &opts).unwrap();
-    for (name, out) in [("beam", &beam), ("pixel", &pixel)] {
+    let covers_march = |name: &str, out: &ibeam::render::RenderOutput| {
         let missed: Vec<usize> = (0..out.hit_mask.len())
             .filter(|&k| march.hit_mask[k] && !out.hit_mask[k])
             .collect();
@@ -224,33 +224,26 @@ fn check_scene(seed: u64, text: &str, all_csg: bool, n: usize) {
             missed.is_empty(),
             "seed {seed}: {name} misses march hits at {missed:?}\n{text}"
         );
-    }
-    let diff: Vec<usize> = (0..beam.hit_mask.len())
-        .filter(|&k| beam.hit_mask[k] != pixel.hit_mask[k])
-        .collect();
-    assert!(
-        diff.is_empty(),
-        "seed {seed}: beam and pixel differ at {diff:?}\n{text}"
-    );
+    };
+    covers_march("beam", &beam);
+    covers_march("pixel", &pixel);
+    let same_mask = |what: &str, other: &ibeam::render::RenderOutput| {
+        let diff: Vec<usize> = (0..beam.hit_mask.len())
+            .filter(|&k| beam.hit_mask[k] != other.hit_mask[k])
+            .collect();
+        assert!(
+            diff.is_empty(),
+            "seed {seed}: {what} differ at {diff:?}\n{text}"
+        );
+    };
+    same_mask("beam and pixel", &pixel);
     // Interpreted, a function of 64 ops or more is pruned to each region,
     // keeping only its sign (`Keep::Signs`): the beam must still find every
     // ray the march hits, and draw what the unpruned JIT render draws.
     opts.method = Method::Beam;
     let pruned = render(&scene, &interp_evaluators(&scene), &opts).unwrap();
-    let missed: Vec<usize> = (0..pruned.hit_mask.len())
-        .filter(|&k| march.hit_mask[k] && !pruned.hit_mask[k])
-        .collect();
-    assert!(
-        missed.is_empty(),
-        "seed {seed}: interpreted beam misses march hits at {missed:?}\n{text}"
-    );
-    let diff: Vec<usize> = (0..beam.hit_mask.len())
-        .filter(|&k| beam.hit_mask[k] != pruned.hit_mask[k])
-        .collect();
-    assert!(
-        diff.is_empty(),
-        "seed {seed}: JIT and interpreted beams differ at {diff:?}\n{text}"
-    );
+    covers_march("interpreted beam", &pruned);
+    same_mask("JIT and interpreted beams", &pruned);
 }
 
 /// Values before and after simplification at random points: the same

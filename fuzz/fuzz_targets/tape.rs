@@ -230,7 +230,22 @@ fuzz_target!(|data: &[u8]| {
     }
 
     // Pruning to all the boxes in one pass writes each box's own tape.
-    let batch = tape.prune_batch(&boxes, usize::MAX, &mut ws);
+    check_batch(&tape, &boxes, &ctx);
+
+    // (b) pruning, and pruning the pruned tape again, keeping bits, then
+    // (c) keeping signs.
+    let mut rng = Rng::new(seed ^ u64::from_le_bytes([data[8], data[9], 0, 0, 0, 0, 0, 1]));
+    check_nested(&whole, &tape, (outer, inner), &mut rng, &ctx);
+    let signs = tape.clone().keeping_signs();
+    check_batch(&signs, &boxes, &ctx);
+    check_nested(&whole, &signs, (outer, inner), &mut rng, &ctx);
+});
+
+/// Pruning `tape` to all of `boxes` in one pass writes the tape pruning to
+/// each box alone writes.
+fn check_batch(tape: &Tape, boxes: &[[Interval; 3]], ctx: &str) {
+    let mut ws = Workspace::default();
+    let batch = tape.prune_batch(boxes, usize::MAX, &mut ws);
     for (b, got) in boxes.iter().zip(&batch) {
         let alone = tape.prune(*b, &mut ws);
         let same_tape = match (got, &alone) {
@@ -238,26 +253,10 @@ fuzz_target!(|data: &[u8]| {
             (None, None) => true,
             _ => false,
         };
-        assert!(same_tape, "batched pruning over {b:?} differs ({ctx})");
+        let keeps = tape.keeps();
+        assert!(same_tape, "batched pruning ({keeps:?}) over {b:?} differs ({ctx})");
     }
-
-    // (b) pruning, and pruning the pruned tape again, keeping bits, then
-    // (c) keeping signs.
-    let mut rng = Rng::new(seed ^ u64::from_le_bytes([data[8], data[9], 0, 0, 0, 0, 0, 1]));
-    check_nested(&whole, &tape, (outer, inner), &mut rng, &ctx);
-    let signs = tape.clone().keeping_signs();
-    let batch = signs.prune_batch(&boxes, usize::MAX, &mut ws);
-    for (b, got) in boxes.iter().zip(&batch) {
-        let alone = signs.prune(*b, &mut ws);
-        let same_tape = match (got, &alone) {
-            (Some(g), Some(a)) => g.tape == a.tape && g.decided == a.decided,
-            (None, None) => true,
-            _ => false,
-        };
-        assert!(same_tape, "batched sign pruning over {b:?} differs ({ctx})");
-    }
-    check_nested(&whole, &signs, (outer, inner), &mut rng, &ctx);
-});
+}
 
 /// `tape` pruned to `outer`, and that pruned to `inner`: valid, never
 /// longer, and agreeing with `whole` (see `check_points`) on each box.

@@ -805,9 +805,7 @@ impl LanesPass<'_> {
         };
         for (j, p) in picks.iter_mut().enumerate() {
             let (a, b) = (self.at(x, j), self.at(y, j));
-            let pick = decided_operand(op, a, b)
-                .or_else(|| signs.then(|| sign_decided_operand(op, a, b)).flatten());
-            if let Some(w) = pick {
+            if let Some(w) = picked_operand(op, a, b, signs) {
                 p.push((k as u32, [xa, ya][w].0));
             }
             let v = value(a.0, b.0);
@@ -860,10 +858,26 @@ fn choice(
     signs: bool,
     value: impl Fn(Interval, Interval) -> Interval,
 ) -> (Reg, Interval, Facts, Option<usize>) {
-    let pick = decided_operand(op, x, y)
-        .or_else(|| signs.then(|| sign_decided_operand(op, x, y)).flatten());
     let v = value(x.0, y.0);
-    (o, v, binary_facts(op, x, y, v), pick)
+    (
+        o,
+        v,
+        binary_facts(op, x, y, v),
+        picked_operand(op, x, y, signs),
+    )
+}
+
+/// The operand a `min` or `max` is replaced by on a box: the one it always
+/// picks there, or, where only its sign matters (`signs`), the one that
+/// keeps its sign.
+#[inline(always)]
+fn picked_operand(
+    op: BinaryOp,
+    x: (Interval, Facts),
+    y: (Interval, Facts),
+    signs: bool,
+) -> Option<usize> {
+    decided_operand(op, x, y).or_else(|| signs.then(|| sign_decided_operand(op, x, y)).flatten())
 }
 
 /// [`interval_unary`] with the ops of distance fields and CSG inline.
