@@ -428,6 +428,9 @@ impl<'a> Tracer<'a> {
         for i in 0..3 {
             mv = mv.add(g.d[i].mul(b[i].sub(Interval::point(c[i]))));
         }
+        // `f` may come from another region's tape than `mv` (one that
+        // keeps signs only); the meet still proves a sign only where one of
+        // the two does, and every tape of the tree has the same signs.
         let (lo, hi) = (f.lo.max(mv.lo), f.hi.min(mv.hi));
         let win = lo > 0.0 || hi < 0.0;
         st.stats.mean_value_tries += 1;

@@ -24,7 +24,10 @@
 //! decided nodes and assigns registers as it goes (a value's register is
 //! taken at its last use, met first when walking backwards, and freed at
 //! its definition). A child prunes further to a smaller box from its own
-//! tape, never from the whole function.
+//! tape, never from the whole function. A tape that keeps signs only
+//! ([`Tape::keeping_signs`], the renderer's) also drops the members of a
+//! union proven positive on the box: its children give the root's sign,
+//! not its bits.
 
 use std::sync::Arc;
 
@@ -150,7 +153,8 @@ pub struct Tape {
     code: Vec<Instr>,
     registers: usize,
     // What its pruned children keep; under `Keep::Signs`, which ops reach
-    // the root through `min`/`max` alone (empty under `Keep::Bits`).
+    // the root through `min`/`max` and negations alone (empty under
+    // `Keep::Bits`).
     keep: Keep,
     sign_only: Vec<bool>,
 }
@@ -163,9 +167,9 @@ pub enum Keep {
     Bits,
     /// The root's sign at every point of the box (negative, zero,
     /// positive or NaN), and bit for bit every value the root's sign
-    /// depends on through more than `min`/`max`. A ray tracer needs no
-    /// more: the surface and the solid are where the root is zero and
-    /// negative. See [`Tape::keeping_signs`].
+    /// depends on through more than `min`, `max` and negation. A ray
+    /// tracer needs no more: the surface and the solid are where the root
+    /// is zero and negative. See [`Tape::keeping_signs`].
     Signs,
 }
 
@@ -242,13 +246,12 @@ impl Tape {
     ///
     /// A `min(a, b)` that only `min`/`max` ops and negations lie between it
     /// and the root (a union, directly or inside an intersection or the
-    /// cut of a difference) is replaced by `a`
-    /// over a box where `b` is proven positive and defined: at every
-    /// point there, `min(a, b)` and `a` have the same sign (and are NaN
-    /// together), and the sign of a `min` or `max` of two values depends
-    /// only on their signs (a negation's on its operand's), so the root
-    /// keeps its sign. Likewise a `max`
-    /// whose other operand is proven negative. Value pruning
+    /// cut of a difference) is replaced by `a` over a box where `b` is
+    /// proven positive and defined: at every point there, `min(a, b)` and
+    /// `a` have the same sign (and are NaN together), and the sign of a
+    /// `min` or `max` of two values depends only on their signs (a
+    /// negation's on its operand's), so the root keeps its sign. Likewise
+    /// a `max` whose other operand is proven negative. Value pruning
     /// ([`Keep::Bits`]) drops `b` only where it is proven above `a`; over
     /// a long box through a union of many small objects every object's
     /// interval overlaps the nearest one's, and nearly nothing is dropped,
