@@ -738,12 +738,29 @@ mod tests {
     // draws the same pixels (the form only tightens intervals).
     #[test]
     fn a_tile_without_the_mean_value_form_never_tries_it() {
-        let scene = crate::lang::load_scene_source(
-            "torus.ib",
-            "object t = torus(0.6, 0.25);\n\
-             camera { eye = (0, 1.5, 2.5); target = (0, 0, 0); }\n",
-        )
-        .expect("scene");
+        // A ball seen in perspective: a 3D scene, whose blocks try the form.
+        let mut scene = two_discs();
+        scene.objects.truncate(1);
+        scene.objects[0].function = {
+            use crate::ir::{BinaryOp, Builder, Var};
+            let mut b = Builder::new();
+            let r2 = b.constant(0.5);
+            let mut sum = r2;
+            for v in [Var::X, Var::Y, Var::Z] {
+                let c = b.var(v);
+                let c2 = b.powi(c, 2);
+                sum = b.binary(BinaryOp::Add, sum, c2);
+            }
+            let twice = b.binary(BinaryOp::Add, r2, r2);
+            let f = b.binary(BinaryOp::Sub, sum, twice);
+            b.finish(f)
+        };
+        scene.camera = Camera {
+            eye: [0.0, 1.5, 2.5],
+            target: [0.0, 0.0, 0.0],
+            up: [0.0, 1.0, 0.0],
+            projection: Projection::Perspective { fov_deg: 40.0 },
+        };
         let evals = build_evaluators(&scene, EvalKind::Interp).expect("evaluators");
         let size = 32;
         let tr = Tracer::new(
