@@ -423,8 +423,7 @@ fn covered_pixels_are_sampled_sparser_and_every_sample_hits() {
         .filter(|&k| out.samples[k] == 16)
         .collect();
     assert!(covered.len() > 20, "only {} covered pixels", covered.len());
-    // Covered pixels beside a full split keep the full depth at depth 3.
-    assert!(covered.len() as u64 <= out.stats.aa_split_covered);
+    assert_eq!(covered.len() as u64, out.stats.aa_split_covered);
     for &k in &covered {
         // The proof holds for every ray through the pixel's area, so for
         // grid:8's samples too, not only for IAA's own.

@@ -61,11 +61,19 @@
 //! first within `[ta, tc]`: no silhouette, no occlusion edge between
 //! surfaces far apart in depth, and no crease crosses the pixel, whose
 //! colour varies only with a continuous normal. Off shadow edges it gets
-//! one level fewer than the depth (at least 2×2); from depth 3 on, a
-//! covered pixel beside a fully split one keeps the full depth (the most
-//! grazing ones, where the colour turns fastest). Most pixels IAA used to
+//! one level fewer than the depth (at least 2×2). Most pixels IAA used to
 //! split were of this kind: on orthocircle at 256², 6,944 of 8,403 split
 //! pixels had every one of their 16 sub-samples hit.
+//!
+//! Every sub-sample, at whatever level, has the depth tolerance of the
+//! finest level (grid:2^depth's), and roots are refined to a sixteenth of
+//! it ([`super::camera::RayCamera::root_tolerance`]): with few samples in
+//! a pixel, a root off by a fraction of the sample spacing moved the point
+//! shaded enough to show in highlights. (A rule that gave covered pixels
+//! beside a full split the full depth from depth 3 on made up for the
+//! coarser tolerance, not for too few samples: with the finer one it
+//! changed orthocircle's depth-3 RMSE by 0.02% and cost 5% of the render,
+//! and it is gone.)
 //!
 //! Shadows are not part of the colour interval (proving a shadow edge
 //! absent over a beam needs a shadow beam from a surface patch, which the
@@ -367,13 +375,6 @@ pub(crate) enum Sampling {
     /// `ir::prune::smooth_on`). It gets one level fewer than the depth
     /// (at least 2×2), off shadow edges.
     Covered,
-    /// Covered, beside a [`Sampling::Full`] pixel of its tile: the most
-    /// grazing of the covered pixels, whose normal turns fastest. Below
-    /// [`COVERED_FULL_DEPTH`] it is sampled as covered; from that depth on,
-    /// where the error budget is a quarter of the one below, at the full
-    /// depth (at 256², covered pixels at depth 3 left orthocircle's RMSE
-    /// 1.6% above grid:8's, and 0.9% with this rule).
-    CoveredBesideFull,
     /// Included (one object, hit by every ray in a proven bracket, facing
     /// the viewer), off any shadow edge, only the colour interval too
     /// wide: 2×2 sub-samples.
@@ -385,12 +386,7 @@ pub(crate) enum Sampling {
 
 impl Sampling {
     /// Every kind that gets sub-samples.
-    pub(crate) const SPLIT: [Sampling; 4] = [
-        Sampling::Covered,
-        Sampling::CoveredBesideFull,
-        Sampling::Shading,
-        Sampling::Full,
-    ];
+    pub(crate) const SPLIT: [Sampling; 3] = [Sampling::Covered, Sampling::Shading, Sampling::Full];
 
     /// Whether the pixel gets sub-samples.
     pub(crate) fn is_split(self) -> bool {
@@ -404,8 +400,6 @@ impl Sampling {
             Sampling::Base => 0,
             Sampling::Shading => depth.min(1),
             Sampling::Covered => depth.saturating_sub(1).max(depth.min(1)),
-            Sampling::CoveredBesideFull if depth >= COVERED_FULL_DEPTH => depth,
-            Sampling::CoveredBesideFull => Sampling::Covered.level(depth),
             Sampling::Full => depth,
         }
     }
@@ -443,10 +437,6 @@ const NEIGHBOURS: [(i64, i64); 8] = [
 /// against the 16×16 reference were unchanged (to four digits) with this
 /// reach, and the sub-samples' shadow time fell by more than half.
 pub(crate) const SHADOW_REUSE_REACH: f64 = 2.0;
-
-/// The IAA depth from which covered pixels beside a full split get the
-/// full depth (see [`Sampling::CoveredBesideFull`]).
-const COVERED_FULL_DEPTH: u32 = 3;
 
 /// Functions longer than this are not tested for smoothness over a pixel
 /// (`ir::prune::smooth_on` walks the whole function): their pixels are
@@ -507,32 +497,11 @@ pub(crate) fn classify_tile(
     };
     let out = (&mut sampling[..], &mut floors[..], &mut brackets[..]);
     ctx.block(px, out, whole, (Floor::NONE, None), st);
-    mark_beside_full(&mut sampling, px.w);
     Classified {
         sampling,
         floors,
         edge: shadow_edge,
         brackets,
-    }
-}
-
-// Covered pixels with a full split among their 4-neighbours in the tile
-// (row-major, `w` wide) become `CoveredBesideFull`.
-fn mark_beside_full(sampling: &mut [Sampling], w: u32) {
-    let (w, h) = (w as usize, sampling.len() / w.max(1) as usize);
-    let full = |i: usize, j: usize| sampling[j * w + i] == Sampling::Full;
-    let beside: Vec<usize> = (0..sampling.len())
-        .filter(|&k| sampling[k] == Sampling::Covered)
-        .filter(|&k| {
-            let (i, j) = (k % w, k / w);
-            (i > 0 && full(i - 1, j))
-                || (i + 1 < w && full(i + 1, j))
-                || (j > 0 && full(i, j - 1))
-                || (j + 1 < h && full(i, j + 1))
-        })
-        .collect();
-    for k in beside {
-        sampling[k] = Sampling::CoveredBesideFull;
     }
 }
 
@@ -981,31 +950,12 @@ mod tests {
     #[test]
     fn sampling_levels_follow_the_depth() {
         use Sampling::*;
-        let levels = |d: u32| [Base, Shading, Covered, CoveredBesideFull, Full].map(|s| s.level(d));
-        assert_eq!(levels(0), [0, 0, 0, 0, 0]);
-        assert_eq!(levels(1), [0, 1, 1, 1, 1]);
-        assert_eq!(levels(2), [0, 1, 1, 1, 2]);
-        assert_eq!(levels(3), [0, 1, 2, 3, 3]);
-        assert_eq!(levels(4), [0, 1, 3, 4, 4]);
-    }
-
-    #[test]
-    fn covered_pixels_beside_a_full_split_are_marked() {
-        use Sampling::*;
-        // 3×2 tile: F C C / C B C.
-        let mut s = vec![Full, Covered, Covered, Covered, Base, Covered];
-        mark_beside_full(&mut s, 3);
-        assert_eq!(
-            s,
-            vec![
-                Full,
-                CoveredBesideFull,
-                Covered,
-                CoveredBesideFull,
-                Base,
-                Covered
-            ]
-        );
+        let levels = |d: u32| [Base, Shading, Covered, Full].map(|s| s.level(d));
+        assert_eq!(levels(0), [0, 0, 0, 0]);
+        assert_eq!(levels(1), [0, 1, 1, 1]);
+        assert_eq!(levels(2), [0, 1, 1, 2]);
+        assert_eq!(levels(3), [0, 1, 2, 3]);
+        assert_eq!(levels(4), [0, 1, 3, 4]);
     }
 
     #[test]

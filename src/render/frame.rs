@@ -96,11 +96,15 @@ impl<'a> Frame<'a> {
         let s = aa.grid_factor();
         let cam = RayCamera::new(&scene.camera, w * s, h * s).map_err(RenderError::Camera)?;
         let tr = Tracer::new(scene, evaluators, cam, opts.prune);
-        // IAA traces split pixels' sub-samples on the 2^depth× image, with its
-        // tighter depth tolerance (the samples are those of grid:2^depth).
-        let finer = |depth: u32| -> Result<Tracer<'a>, RenderError> {
-            let cam = RayCamera::new(&scene.camera, w << depth, h << depth)
-                .map_err(RenderError::Camera)?;
+        // IAA traces each split pixel's sub-samples on the 2^level× image of
+        // its level (`aa::Sampling::level`, where grid:2^level puts them),
+        // with the depth tolerance of the finest level's, 2^depth×,
+        // whatever the level: every sub-sample of a depth-d render has
+        // grid:2^d's tolerance (a coarser one moved the points shaded).
+        let finer = |level: u32, depth: u32| -> Result<Tracer<'a>, RenderError> {
+            let cam = RayCamera::new(&scene.camera, w << level, h << level)
+                .map_err(RenderError::Camera)?
+                .with_tolerance_of_finer(1 << (depth - level));
             Ok(Tracer {
                 sub_samples: true,
                 ..tr.with_camera(cam)
@@ -110,7 +114,11 @@ impl<'a> Frame<'a> {
             Aa::Iaa { depth, .. } => {
                 let used = Sampling::SPLIT.map(|s| s.level(depth));
                 let levels = (0..=depth)
-                    .map(|l| (l > 0 && used.contains(&l)).then(|| finer(l)).transpose())
+                    .map(|l| {
+                        (l > 0 && used.contains(&l))
+                            .then(|| finer(l, depth))
+                            .transpose()
+                    })
                     .collect::<Result<_, _>>()?;
                 Some(Fine { levels })
             }

@@ -171,7 +171,7 @@ pub(crate) fn refine(
     st: &mut RenderStats,
 ) -> Option<Hit> {
     let (fa, fb) = sign_change(tr, ray, live, (a, b), st)?;
-    let tol = tr.cam.tolerance(a);
+    let tol = tr.cam.root_tolerance(a);
     let mut evals = 0u64;
     let t = illinois(
         |t| {
@@ -286,7 +286,7 @@ pub(crate) fn refine_batch(
     searches.extend((0..n).filter(|&i| fa[i] > 0.0 && fb[i].0 <= 0.0).map(|i| {
         let k = &brackets[i];
         let s = Illinois::new(k.a, k.b, fa[i], fb[i].0);
-        (i, s, tr.cam.tolerance(k.a))
+        (i, s, tr.cam.root_tolerance(k.a))
     }));
     running.clear();
     running.extend(0..searches.len());
