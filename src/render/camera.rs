@@ -588,6 +588,27 @@ mod tests {
         ]
     }
 
+    // A camera's tolerance made `f` times finer is that of the camera with
+    // `f` times the resolution (IAA's sub-samples at a coarse level take
+    // the finest level's), and roots are refined 16 times finer still.
+    #[test]
+    fn a_finer_tolerance_is_the_finer_cameras() {
+        for cam in cams() {
+            let coarse = RayCamera::new(&cam, 160, 120).unwrap();
+            for f in [1u32, 2, 8] {
+                let fine = RayCamera::new(&cam, 160 * f, 120 * f).unwrap();
+                let scaled = coarse.with_tolerance_of_finer(f);
+                for t in [0.5, 3.0, 40.0] {
+                    let (a, b) = (scaled.tolerance(t), fine.tolerance(t));
+                    assert!((a - b).abs() <= 1e-12 * b, "{f} {t}: {a} {b}");
+                    assert_eq!(scaled.spacing(t), coarse.spacing(t));
+                    let r = scaled.root_tolerance(t);
+                    assert!((r * ROOT_REFINEMENT - a).abs() <= 1e-12 * a, "{r} {a}");
+                }
+            }
+        }
+    }
+
     #[test]
     fn shared_origins_or_directions_give_the_corners_hull_to_the_bit() {
         let mut rng = crate::ir::random::Rng::new(5);

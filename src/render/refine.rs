@@ -514,6 +514,77 @@ mod tests {
         }
     }
 
+    // A bracketed root comes back within the root tolerance (a sixteenth
+    // of the depth tolerance) of the true one, alone and batched. The
+    // function is flat at its root, (z − c)³ + 10⁻⁶ (z − c), so the false
+    // position crawls there and stops close to its tolerance rather than
+    // far inside it (on a sphere a secant step lands within 10⁻¹⁰); the
+    // root along a ray is where z = c.
+    #[test]
+    fn roots_are_refined_to_the_root_tolerance() {
+        use crate::ir::{BinaryOp, Builder, Var};
+        const C: f64 = 0.3;
+        let mut b = Builder::new();
+        let z = b.var(Var::Z);
+        let c = b.constant(C);
+        let u = b.binary(BinaryOp::Sub, z, c);
+        let u2 = b.binary(BinaryOp::Mul, u, u);
+        let u3 = b.binary(BinaryOp::Mul, u2, u);
+        let k = b.constant(1e-6);
+        let ku = b.binary(BinaryOp::Mul, k, u);
+        let f = b.binary(BinaryOp::Add, u3, ku);
+        // Negative towards −z: the rays below start outside.
+        let minus = b.constant(-1.0);
+        let f = b.binary(BinaryOp::Mul, minus, f);
+        let evals: Vec<Arc<dyn Evaluator>> = vec![Arc::new(Interpreter::new(b.finish(f)))];
+        let tr = Tracer {
+            cam: RayCamera::new(&Camera::default(), 64, 64).unwrap(),
+            evals: &evals,
+            colors: vec![[1.0; 3]],
+            lights: &[],
+            bounds: Bounds::default(),
+            diag: 7.0,
+            live_ops: vec![0],
+            tapes: vec![None],
+            prune: false,
+            flat: false,
+            groups: Default::default(),
+            slice_ends: std::sync::Arc::new([]),
+            large: false,
+            sub_samples: false,
+        };
+        let mut rng = Rng::new(29);
+        let mut scratch = RefineScratch::default();
+        let mut worst: f64 = 0.0;
+        for _ in 0..300 {
+            let o = [rng.range(-0.5, 0.5), rng.range(-0.5, 0.5), -4.0];
+            let d = [rng.range(-0.2, 0.2), rng.range(-0.2, 0.2), 1.0];
+            let root = (C - o[2]) / d[2];
+            let ray = PixelRay {
+                o: point_box(o),
+                d: point_box(d),
+                om: o,
+                dm: d,
+            };
+            let (a, b) = (root - rng.range(0.01, 0.5), root + rng.range(0.01, 0.5));
+            let tol = tr.cam.root_tolerance(a);
+            let mut st = RenderStats::default();
+            let alone = refine(&tr, &ray, &[0], a, b, &mut st).expect("a sign change");
+            scratch.brackets = vec![Bracket { ray, a, b }];
+            let batched = refine_batch(&tr, &mut scratch, &[0], &mut st)[0].expect("a sign change");
+            for t in [alone.t, batched.t] {
+                assert!(
+                    (t - root).abs() <= tol,
+                    "{t} against {root}, tolerance {tol}"
+                );
+                worst = worst.max((t - root).abs() / tol);
+            }
+        }
+        // The test can tell: some roots end within a factor 16 of the
+        // root tolerance, where a coarser one would have stopped.
+        assert!(worst > 1.0 / 16.0, "every root within {worst} tolerances");
+    }
+
     // Batched refinement gives each bracket what refining it alone gives,
     // bit for bit, with the same evaluation count: random functions of two
     // objects, random rays, brackets with and without a sign change.
