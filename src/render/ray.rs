@@ -434,8 +434,6 @@ mod tests {
     use super::*;
     use crate::eval::{Evaluator, Grad, IntervalGrad};
     use crate::interval::boxes::point_box;
-    use crate::render::camera::RayCamera;
-    use crate::scene::{Bounds, Camera};
     use std::sync::Arc;
 
     /// A function of x alone, with its interval extension and derivative.
@@ -471,22 +469,7 @@ mod tests {
     // Traces the ray x = -2 + t (t in [0, 4]) through `e`.
     fn trace(e: OfX) -> (Option<Hit>, RenderStats, f64) {
         let evals: Vec<Arc<dyn Evaluator>> = vec![Arc::new(e)];
-        let tr = Tracer {
-            cam: RayCamera::new(&Camera::default(), 64, 64).unwrap(),
-            evals: &evals,
-            colors: vec![[1.0; 3]],
-            lights: &[],
-            bounds: Bounds::default(),
-            diag: 7.0,
-            live_ops: vec![0; 1],
-            tapes: vec![None],
-            prune: false,
-            flat: false,
-            groups: Default::default(),
-            slice_ends: std::sync::Arc::new([]),
-            large: false,
-            sub_samples: false,
-        };
+        let tr = Tracer::of_objects_for_tests(&evals, &[], 64);
         let (o, d) = ([-2.0, 0.0, 0.0], [1.0, 0.0, 0.0]);
         let ray = PixelRay {
             o: point_box(o),

@@ -475,8 +475,6 @@ mod tests {
     use crate::eval::interp::Interpreter;
     use crate::interval::boxes::point_box;
     use crate::ir::random::{Rng, random_function};
-    use crate::render::camera::RayCamera;
-    use crate::scene::{Bounds, Camera};
 
     #[test]
     fn illinois_converges_within_tolerance() {
@@ -537,22 +535,7 @@ mod tests {
         let minus = b.constant(-1.0);
         let f = b.binary(BinaryOp::Mul, minus, f);
         let evals: Vec<Arc<dyn Evaluator>> = vec![Arc::new(Interpreter::new(b.finish(f)))];
-        let tr = Tracer {
-            cam: RayCamera::new(&Camera::default(), 64, 64).unwrap(),
-            evals: &evals,
-            colors: vec![[1.0; 3]],
-            lights: &[],
-            bounds: Bounds::default(),
-            diag: 7.0,
-            live_ops: vec![0],
-            tapes: vec![None],
-            prune: false,
-            flat: false,
-            groups: Default::default(),
-            slice_ends: std::sync::Arc::new([]),
-            large: false,
-            sub_samples: false,
-        };
+        let tr = Tracer::of_objects_for_tests(&evals, &[], 64);
         let mut rng = Rng::new(29);
         let mut scratch = RefineScratch::default();
         let mut worst: f64 = 0.0;
@@ -600,22 +583,7 @@ mod tests {
                         as Arc<dyn Evaluator>
                 })
                 .collect();
-            let tr = Tracer {
-                cam: RayCamera::new(&Camera::default(), 64, 64).unwrap(),
-                evals: &evals,
-                colors: vec![[1.0; 3]; 2],
-                lights: &[],
-                bounds: Bounds::default(),
-                diag: 7.0,
-                live_ops: vec![0; 2],
-                tapes: vec![None; 2],
-                prune: false,
-                flat: false,
-                groups: Default::default(),
-                slice_ends: std::sync::Arc::new([]),
-                large: false,
-                sub_samples: false,
-            };
+            let tr = Tracer::of_objects_for_tests(&evals, &[], 64);
             let brackets: Vec<Bracket> = (0..24)
                 .map(|_| {
                     let o = [

@@ -342,8 +342,7 @@ pub(crate) fn colour_interval(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::camera::RayCamera;
-    use crate::scene::{Bounds, Camera, Light};
+    use crate::scene::Light;
 
     // The colour interval holds the shaded colour of every normal, view
     // vector and point in its boxes (lights without shadows here).
@@ -361,22 +360,7 @@ mod tests {
                 shadows: false,
             },
         ];
-        let tr = Tracer {
-            cam: RayCamera::new(&Camera::default(), 8, 8).unwrap(),
-            evals: &[],
-            colors: vec![],
-            lights: &lights,
-            bounds: Bounds::default(),
-            diag: 7.0,
-            live_ops: vec![0; 1],
-            tapes: vec![None],
-            prune: false,
-            flat: false,
-            groups: Default::default(),
-            slice_ends: std::sync::Arc::new([]),
-            large: false,
-            sub_samples: false,
-        };
+        let tr = Tracer::of_objects_for_tests(&[], &lights, 8);
         let color = [0.8, 0.3, 0.2];
         let mut seed = 0x1234_5678_9abc_def0u64;
         let mut rnd = move || {

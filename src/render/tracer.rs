@@ -773,6 +773,34 @@ fn constant_along_rays(cam: &RayCamera, scene: &Scene) -> bool {
 }
 
 #[cfg(test)]
+impl<'a> Tracer<'a> {
+    /// A tracer over `evals` (white, none pruned) and `lights`, through
+    /// the default camera at `size`², in the default bounds.
+    pub(crate) fn of_objects_for_tests(
+        evals: &'a [Arc<dyn Evaluator>],
+        lights: &'a [Light],
+        size: u32,
+    ) -> Tracer<'a> {
+        Tracer {
+            cam: RayCamera::new(&crate::scene::Camera::default(), size, size).unwrap(),
+            evals,
+            colors: vec![[1.0; 3]; evals.len()],
+            lights,
+            bounds: Bounds::default(),
+            diag: 7.0,
+            live_ops: vec![0; evals.len()],
+            tapes: vec![None; evals.len()],
+            prune: false,
+            flat: false,
+            groups: Default::default(),
+            slice_ends: Arc::new([]),
+            large: false,
+            sub_samples: false,
+        }
+    }
+}
+
+#[cfg(test)]
 impl Tracer<'static> {
     /// A tracer with no objects or lights through `camera` at
     /// `size`², over bounds that are not a cube and not centred.
