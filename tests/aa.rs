@@ -102,10 +102,15 @@ fn iaa_on_a_sphere_samples_the_interior_once_and_splits_the_silhouette() {
         if !near && plain.hit_mask[k] {
             interior += 1;
             assert_eq!(out.samples[k], 1, "interior pixel {k} split");
-            assert_eq!(
-                out.image.as_raw()[3 * k..3 * k + 3],
-                plain.image.as_raw()[3 * k..3 * k + 3]
-            );
+            // The same centre ray, its root refined in the bracket of the
+            // pixel's area rather than of the plain render's beam: the
+            // same colour to within the root tolerance (one level in 8
+            // bits).
+            let (a, p) = (out.image.as_raw(), plain.image.as_raw());
+            for c in 3 * k..3 * k + 3 {
+                let d = (i32::from(a[c]) - i32::from(p[c])).abs();
+                assert!(d <= 1, "interior pixel {k}: {} against {}", a[c], p[c]);
+            }
         }
         if !near && !plain.hit_mask[k] {
             assert_eq!(out.samples[k], 1, "background pixel {k} split");

@@ -220,6 +220,7 @@ mod tests {
             normals: Some((0..n).map(|k| [at(k).sin(), 0.0, 0.0]).collect()),
             class: None,
             state: TileState::default(),
+            classified: None,
         }
     }
 

@@ -151,42 +151,8 @@ fn block(
     }
     if single {
         let k = tile.idx(b.x0, b.y0);
-        let (pt0, pt1) = tile.slabs[k].unwrap_or((t0, t1));
-        let ray = tile.ray(k);
-        // In a scene large enough to prune (`Tracer::large`), the ray
-        // starts where the blocks above it proved its beam empty
-        // (`t_floor`) rather than at its clip start, when f is positive
-        // there: sweeping that
-        // prefix again cost a third of a 1000-sphere render, its pieces
-        // evaluated on the tile's slice tapes of hundreds of ops. No
-        // surface is skipped (interval arithmetic excluded it over the
-        // whole beam). `Method::Pixel`'s rays start at their clip starts
-        // and cut their pieces elsewhere: roots are refined from other
-        // brackets (depths agree to the refinement tolerance), and where
-        // f overflows or is undefined along the prefix the two sweeps can
-        // settle a pixel differently (an adversarial 2-op scene drew 198
-        // more pixels), so small scenes, where the prefix costs a few
-        // short evaluations, keep the clip start and the pixel method's
-        // exact mask.
-        // IAA's sub-samples start at the floor too (their masks are
-        // compared with no other method's). Both sweep the block's first
-        // candidate piece first (see `probe::Floor` and
-        // `Tracer::ray_pieces`).
-        let start = if (tr.large || tr.sub_samples)
-            && t_floor > pt0
-            && scene_point(tr, live, ray.at(t_floor), &mut st.stats).0 > 0.0
-        {
-            t_floor
-        } else {
-            pt0
-        };
-        let near = if tr.large || tr.sub_samples {
-            floor.near_from(start)
-        } else {
-            start
-        };
-        tile.hits[k] = trace_ray_near_first(tr, &ray, (start, near), pt1, live, st);
-        tile.class[k] = Class::Ray;
+        let from_floor = tr.large || tr.sub_samples;
+        single_ray(tr, tile, k, (floor, from_floor), (t0, t1), live, st);
         return;
     }
     // The beam's corner rays (the camera's, to the bit), which both tests
@@ -198,6 +164,58 @@ fn block(
     }
     let near = floor.near_from(t0);
     beam_tests(tr, tile, b, &corners, (t0, near, t1), live, st);
+}
+
+/// Traces pixel `k` of the tile as one guaranteed ray, below a beam that
+/// proved its rays empty up to `floor` (the block's T range `(t0, t1)`
+/// where its slab holds none); from the floor where `from_floor` says so
+/// (see below), else from its clip start.
+pub(crate) fn single_ray(
+    tr: &Tracer<'_>,
+    tile: &mut TileRays,
+    k: usize,
+    (floor, from_floor): (Floor, bool),
+    (t0, t1): (f64, f64),
+    live: &[u32],
+    st: &mut TileState,
+) {
+    let t_floor = floor.at;
+    let (pt0, pt1) = tile.slabs[k].unwrap_or((t0, t1));
+    let ray = tile.ray(k);
+    // In a scene large enough to prune (`Tracer::large`), the ray
+    // starts where the blocks above it proved its beam empty
+    // (`t_floor`) rather than at its clip start, when f is positive
+    // there: sweeping that
+    // prefix again cost a third of a 1000-sphere render, its pieces
+    // evaluated on the tile's slice tapes of hundreds of ops. No
+    // surface is skipped (interval arithmetic excluded it over the
+    // whole beam). `Method::Pixel`'s rays start at their clip starts
+    // and cut their pieces elsewhere: roots are refined from other
+    // brackets (depths agree to the refinement tolerance), and where
+    // f overflows or is undefined along the prefix the two sweeps can
+    // settle a pixel differently (an adversarial 2-op scene drew 198
+    // more pixels), so small scenes, where the prefix costs a few
+    // short evaluations, keep the clip start and the pixel method's
+    // exact mask.
+    // IAA's base samples and sub-samples start at the floor too (their
+    // masks are compared with no other method's). Both sweep the block's
+    // first candidate piece first (see `probe::Floor` and
+    // `Tracer::ray_pieces`).
+    let start = if from_floor
+        && t_floor > pt0
+        && scene_point(tr, live, ray.at(t_floor), &mut st.stats).0 > 0.0
+    {
+        t_floor
+    } else {
+        pt0
+    };
+    let near = if from_floor {
+        floor.near_from(start)
+    } else {
+        start
+    };
+    tile.hits[k] = trace_ray_near_first(tr, &ray, (start, near), pt1, live, st);
+    tile.class[k] = Class::Ray;
 }
 
 // The beam tests of a block of several pixels over its T range: rejected,

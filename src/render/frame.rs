@@ -15,7 +15,7 @@ use super::camera::{self, RayCamera};
 use super::stats::RenderStats;
 use super::subsample::{SplitSamples, downsample, trace_split};
 use super::tile::{ShadowHint, TileOut, TileSpec, ms_since, render_tile};
-use super::tracer::Tracer;
+use super::tracer::{TileState, Tracer};
 use super::{MAX_SIZE, RenderError, RenderOptions, RenderOutput, TILE, output};
 use crate::eval::Evaluator;
 use crate::scene::Scene;
@@ -316,6 +316,9 @@ impl<'a> Frame<'a> {
             tiles
                 .par_iter()
                 .map(|&(x0, y0, tw, th)| {
+                    if let Aa::Iaa { threshold, .. } = self.aa {
+                        return self.trace_classified((x0, y0, tw, th), threshold);
+                    }
                     let spec = TileSpec {
                         x0: x0 * s,
                         y0: y0 * s,
@@ -326,12 +329,45 @@ impl<'a> Frame<'a> {
                         shadow_hints: None,
                         brackets: None,
                         mean_value: true,
+                        rays_from_floors: false,
                     };
                     let out = render_tile(tr, opts, spec, bg);
                     if s > 1 { downsample(out, s) } else { out }
                 })
                 .collect()
         })
+    }
+
+    // IAA's base render of one tile (`area`: x0, y0, w, h): the
+    // pixel-area tests first, then the centre rays of the pixels they did
+    // not prove background, refined in their included cells' brackets or
+    // traced one by one from where their areas were proven empty (the
+    // tests already found the beams over pixel centres undecided there).
+    // The tests' findings go with the tile to its anti-aliasing.
+    fn trace_classified(&self, area: (u32, u32, u32, u32), threshold: f64) -> TileOut {
+        let t0 = Instant::now();
+        let mut st = TileState::default();
+        let c = aa::classify_tile(&self.tr, area, threshold, &mut st);
+        let tests_ms = ms_since(t0);
+        let (x0, y0, w, h) = area;
+        let spec = TileSpec {
+            x0,
+            y0,
+            w,
+            h,
+            mask: Some(&c.traced),
+            floors: Some(&c.floors),
+            shadow_hints: None,
+            brackets: Some(&c.brackets),
+            mean_value: true,
+            rays_from_floors: true,
+        };
+        let mut out = render_tile(&self.tr, &self.opts, spec, self.bg);
+        st.stats.aa_tests_cpu_ms += tests_ms;
+        st.stats.aa_cpu_ms += tests_ms;
+        out.state.stats.merge(&st.stats);
+        out.classified = Some(Box::new(c));
+        out
     }
 
     // Anti-aliases traced tiles in parallel (`beside(i)`: the base samples
@@ -473,11 +509,11 @@ fn edges_of(t: &TileOut) -> TileEdges {
     TileEdges::new(t.w, t.h, &t.depth, &t.shadowed)
 }
 
-// Applies IAA to a tile (or, for the other modes, counts its samples):
-// pixel-area tests (`beside`: the base samples around the tile, for the
-// shadow-edge rule), then the split pixels' sub-samples traced with beams
-// on `fine`'s images, square by square (`trace_split`), each at its
-// pixel's level (`aa::Sampling`).
+// Applies IAA to a tile traced by `Frame::trace_classified` (or, for the
+// other modes, counts its samples): the shadow-edge rule over its base
+// samples (`beside`: those around the tile), then the split pixels'
+// sub-samples traced with beams on `fine`'s images, square by square
+// (`trace_split`), each at its pixel's level (`aa::Sampling`).
 fn anti_alias(
     tr: &Tracer<'_>,
     fine: Option<&Fine<'_>>,
@@ -487,7 +523,7 @@ fn anti_alias(
     beside: Beside<'_>,
     bg: [f64; 3],
 ) {
-    let (Aa::Iaa { threshold, depth }, Some(fine)) = (aa, fine) else {
+    let (Aa::Iaa { depth, .. }, Some(fine)) = (aa, fine) else {
         let n = u64::from(t.w * t.h);
         let per = u64::from(aa.grid_factor()).pow(2);
         let st = &mut t.state.stats;
@@ -499,22 +535,21 @@ fn anti_alias(
         return;
     };
     let t0 = Instant::now();
-    // The pixel-area tests carry on with the tile's own state: the
-    // mean-value record of its base render included.
+    // The sub-samples carry on with the tile's own state.
     let mut st = std::mem::take(&mut t.state);
     let mut px = aa::TilePixels {
-        x0: t.x0,
-        y0: t.y0,
-        w: t.w,
-        h: t.h,
         linear: &mut t.linear,
         depth: &mut t.depth,
         coverage: &mut t.coverage,
         samples: &mut t.samples,
         shadowed: &t.shadowed,
     };
-    let c = aa::classify_tile(tr, &mut px, beside, bg, threshold, &mut st);
-    st.stats.aa_tests_cpu_ms += ms_since(t0);
+    // Traced by `Frame::trace_classified`, which always classifies.
+    let Some(mut c) = t.classified.take() else {
+        unreachable!("an IAA tile is classified when traced")
+    };
+    let edge = aa::shadow_edges((t.w, t.h), px.depth, px.shadowed, beside);
+    c.mark_shadow_edges(edge, &mut st.stats);
     let area = (t.x0, t.y0, t.w, t.h);
     // Each split pixel is sampled at its own level (see `aa::Sampling`):
     // the pixels of one level are traced together on that level's image.

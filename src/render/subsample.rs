@@ -58,6 +58,7 @@ pub(super) fn downsample(t: TileOut, s: u32) -> TileOut {
         normals: t.normals.as_deref().map(|v| pick(v, dims)),
         class: t.class.as_deref().map(|v| pick(v, dims)),
         state: t.state,
+        classified: None,
     }
 }
 
@@ -145,6 +146,7 @@ pub(super) fn trace_split(
                 brackets: Some(&fine_brackets),
                 // Too few blocks to learn whether the form pays.
                 mean_value: false,
+                rays_from_floors: false,
             };
             (g, downsample(render_tile(fine, &fine_opts, spec, bg), f))
         })

@@ -7,7 +7,7 @@ use image::Rgb;
 
 use super::beam::{self, TileRays};
 use super::camera::RayGrid;
-use super::probe::Floor;
+use super::probe::{Floor, Rect};
 use super::shade::{self, TileSurfs};
 use super::shadow;
 use super::tracer::{MeanValuePolicy, PrunedEvals, TileState, Tracer};
@@ -48,6 +48,13 @@ pub(crate) struct TileSpec<'m> {
     /// (256², threshold 1/4, one thread: orthocircle 448–506 → 408–439 ms,
     /// metaballs 248–261 → 231–236 ms, CSG unchanged).
     pub mean_value: bool,
+    /// IAA's base render, after its pixel-area tests (`aa::classify_tile`):
+    /// every traced pixel that `brackets` does not settle is one
+    /// guaranteed ray from its floor, not part of a beam (the area tests
+    /// left it undecided, and a beam over pixel centres would repeat
+    /// them), and shadow beams are tried over every square of
+    /// [`SHADOW_GROUP`] pixels (false: beams as usual).
+    pub rays_from_floors: bool,
 }
 
 /// A bracket proven to hold the first root of every ray of a beam (IAA's
@@ -110,6 +117,8 @@ pub(crate) struct TileOut {
     pub class: Option<Vec<Rgb<u8>>>,
     /// Counters and the mean-value record, which anti-aliasing carries on.
     pub state: TileState,
+    /// IAA: what the pixel-area tests found, for the anti-aliasing pass.
+    pub classified: Option<Box<super::aa::Classified>>,
 }
 
 /// Milliseconds since `t`.
@@ -145,6 +154,7 @@ pub(crate) fn render_tile(
             normals: opts.want_normals.then(|| vec![[f64::NAN; 3]; n]),
             class: None,
             state: st,
+            classified: None,
         };
     }
     let mut tile = tile_rays(tr, opts, &spec);
@@ -162,7 +172,12 @@ pub(crate) fn render_tile(
         }
         None => tr,
     };
-    visibility(tr_vis, opts.method, &mut tile, spec.h, &mut st);
+    if spec.rays_from_floors {
+        rays_from_floors(tr_vis, &mut tile, spec.floors, &mut st);
+        tile.included = squares(spec.w, spec.h, SHADOW_GROUP).collect();
+    } else {
+        visibility(tr_vis, opts.method, &mut tile, spec.h, &mut st);
+    }
     for (k, h) in bracketed {
         tile.hits[k] = Some(h);
         tile.class[k] = Class::Included;
@@ -246,6 +261,7 @@ pub(crate) fn render_tile(
             cells: Default::default(),
             ..st
         },
+        classified: None,
     }
 }
 
@@ -429,6 +445,45 @@ pub(crate) fn tile_depths(tr: &Tracer<'_>, tile: &TileRays) -> Option<Interval> 
         t1 = t1.max(c);
     }
     (t0 <= t1).then(|| Interval::new(t0, t1))
+}
+
+/// Side of the squares of IAA's base render over which shadow beams are
+/// tried (see [`TileSpec::rays_from_floors`]): on orthocircle at 256² they
+/// left as many shadow segments to trace as the plain render's included
+/// blocks did (18.2k), where the area tests' included cells, which stop
+/// short of the silhouettes, left 23k.
+const SHADOW_GROUP: u32 = 4;
+
+// The `side`×`side` squares of a `w`×`h` tile, row by row (clipped at its
+// right and bottom sides).
+fn squares(w: u32, h: u32, side: u32) -> impl Iterator<Item = Rect> {
+    (0..h).step_by(side as usize).flat_map(move |y0| {
+        (0..w).step_by(side as usize).map(move |x0| Rect {
+            x0,
+            y0,
+            x1: (x0 + side).min(w),
+            y1: (y0 + side).min(h),
+        })
+    })
+}
+
+// Traces every pixel with a range left as one guaranteed ray from its
+// floor (`floors`, None: its clip start).
+fn rays_from_floors(
+    tr: &Tracer<'_>,
+    tile: &mut TileRays,
+    floors: Option<&[Floor]>,
+    st: &mut TileState,
+) {
+    let all: Vec<u32> = (0..tr.evals.len() as u32).collect();
+    for k in 0..tile.slabs.len() {
+        let Some(range) = tile.slabs[k] else {
+            tile.class[k] = Class::Outside;
+            continue;
+        };
+        let floor = floors.map_or(Floor::NONE, |f| f[k]);
+        beam::single_ray(tr, tile, k, (floor, true), range, &all, st);
+    }
 }
 
 // Finds every pixel's first hit with `method`.
@@ -799,6 +854,7 @@ mod tests {
             shadow_hints: None,
             brackets: None,
             mean_value: true,
+            rays_from_floors: false,
         }
     }
 }
