@@ -111,7 +111,7 @@
 
 use std::fmt;
 
-use super::camera::{CornerRays, bounds_box};
+use super::camera::{CornerRays, RayGrid, bounds_box};
 use super::probe::{self, Floor, Form, Rect, Sweep};
 use super::shade::colour_interval;
 use super::stats::RenderStats;
@@ -471,7 +471,7 @@ pub(crate) fn classify_tile(
         tr,
         all: (0..tr.evals.len() as u32).collect(),
         threshold,
-        origin: (x0, y0),
+        corners: RayGrid::of_pixel_corners(&tr.cam, (x0, y0), (w, h)),
     };
     let whole = Rect {
         x0: 0,
@@ -610,8 +610,11 @@ struct Ctx<'t, 'a> {
     /// Every object: a cell's beam tests consider them all.
     all: Vec<u32>,
     threshold: f64,
-    /// The tile's top left pixel in the image.
-    origin: (u32, u32),
+    /// The rays through the tile's pixel corners, from which every
+    /// cell's corner rays are read (the same bits as
+    /// `RayCamera::corners`, from two sums per corner instead of four
+    /// interval products: building them was a tenth of the tests).
+    corners: RayGrid,
 }
 
 impl Ctx<'_, '_> {
@@ -623,12 +626,9 @@ impl Ctx<'_, '_> {
         (floor, inherited): (Floor, Option<RootBracket>),
         st: &mut TileState,
     ) {
-        let (x0, y0) = self.origin;
-        let xs = (f64::from(x0 + b.x0), f64::from(x0 + b.x1));
-        let ys = (f64::from(y0 + b.y0), f64::from(y0 + b.y1));
         // Only a pixel is sampled by what the covered test finds: larger
         // cells skip it.
-        let d = self.test((xs, ys), (floor, inherited), b.is_pixel(), st);
+        let d = self.test(b, (floor, inherited), b.is_pixel(), st);
         match d.cell {
             Cell::Background => {
                 for p in b.pixels() {
@@ -665,12 +665,12 @@ impl Ctx<'_, '_> {
         }
     }
 
-    // The beam tests of the screen rectangle xs × ys (whole area), inside
+    // The beam tests of the block `b` (whole area), inside
     // a parent cell whose beam was included in `inherited` if that is
     // Some; the covered test too where `cover` asks for it.
     fn test(
         &self,
-        (xs, ys): ((f64, f64), (f64, f64)),
+        b: Rect,
         (floor, inherited): (Floor, Option<RootBracket>),
         cover: bool,
         st: &mut TileState,
@@ -683,7 +683,7 @@ impl Ctx<'_, '_> {
             covered: false,
             bracket: None,
         };
-        let corners = tr.cam.corners(xs, ys);
+        let corners = self.corners.corners((b.x0, b.y0), (b.x1 + 1, b.y1 + 1));
         if let Some(d) = inherited.and_then(|br| self.test_within(&corners, floor, br, st)) {
             return d;
         }
@@ -693,7 +693,7 @@ impl Ctx<'_, '_> {
         if t0.partial_cmp(&t1).is_none_or(|o| o.is_gt()) {
             return decide(Cell::Background, floor);
         }
-        let side = (xs.1 - xs.0).max(ys.1 - ys.0);
+        let side = f64::from((b.x1 - b.x0).max(b.y1 - b.y0));
         let min_w = |t: f64| probe::min_width(tr, side, t);
         // F over the part of the beam piece inside the bounds; None when
         // the piece lies wholly outside them.
@@ -921,6 +921,12 @@ impl Ctx<'_, '_> {
         } else {
             return None;
         };
+        // Clamped to [0, 1], no channel's interval is wider than 1: a
+        // threshold of 1 or more accepts any colour, which need not be
+        // bounded (a tenth of the pixel tests at threshold 1).
+        if self.threshold >= 1.0 {
+            return Some(true);
+        }
         let col = colour_interval(tr, tr.colors[k], &n, &v, &hb)?;
         Some(
             col.iter()

@@ -418,11 +418,29 @@ pub struct RayGrid {
 
 impl RayGrid {
     /// The terms of the `w × h` pixels from `(x0, y0)`.
-    pub fn new(cam: &RayCamera, (x0, y0): (u32, u32), (w, h): (u32, u32)) -> RayGrid {
+    pub fn new(cam: &RayCamera, origin: (u32, u32), size: (u32, u32)) -> RayGrid {
+        RayGrid::at_offset(cam, origin, size, 0.5)
+    }
+
+    /// The terms of the rays through the `(w + 1) × (h + 1)` pixel corners
+    /// of the `w × h` pixels from `(x0, y0)`: ray `(i, j)` is
+    /// [`RayCamera::ray_at`]`(x0 + i, y0 + j)`, to the bit.
+    pub fn of_pixel_corners(cam: &RayCamera, origin: (u32, u32), (w, h): (u32, u32)) -> RayGrid {
+        RayGrid::at_offset(cam, origin, (w + 1, h + 1), 0.0)
+    }
+
+    // The terms of the rays at `offset` (in pixels, both axes) from the
+    // top left corners of the `w × h` pixels from `(x0, y0)`.
+    fn at_offset(
+        cam: &RayCamera,
+        (x0, y0): (u32, u32),
+        (w, h): (u32, u32),
+        offset: f64,
+    ) -> RayGrid {
         let column = |c: DVec3, cx: DVec3| -> Vec<IBox> {
             (x0..x0 + w)
                 .map(|i| {
-                    let xi = Interval::point(f64::from(i) + 0.5);
+                    let xi = Interval::point(f64::from(i) + offset);
                     std::array::from_fn(|k| {
                         Interval::point(c[k]).add(xi.mul(Interval::point(cx[k])))
                     })
@@ -432,7 +450,7 @@ impl RayGrid {
         let row = |cy: DVec3| -> Vec<IBox> {
             (y0..y0 + h)
                 .map(|j| {
-                    let yj = Interval::point(f64::from(j) + 0.5);
+                    let yj = Interval::point(f64::from(j) + offset);
                     std::array::from_fn(|k| yj.mul(Interval::point(cy[k])))
                 })
                 .collect()
