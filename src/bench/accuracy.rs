@@ -17,8 +17,9 @@
 //!   anti-aliasing) hits. (Any single hit of 256 would flag every
 //!   silhouette pixel of a one-sample method, which says nothing.)
 //!
-//! Times are render wall times (best of `repeats`), evaluators built once
-//! per scene outside the timing.
+//! Times are render wall times, the best of [`REPEATS`] rounds that
+//! render every variant in turn (see [`sweep_scene`]), evaluators built
+//! once per scene outside the timing.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -34,6 +35,10 @@ pub const REFERENCE: (Method, Aa) = (Method::Pixel, Aa::Grid(16));
 
 /// Coverage differences above this count in `coverage_diff_pct`.
 pub const COVERAGE_TOLERANCE: f64 = 1.0 / 8.0;
+
+/// Rounds over every variant in [`run_accuracy`]; each time is the best
+/// of these.
+pub const REPEATS: u32 = 3;
 
 /// Builds one evaluator per scene object.
 pub type MakeEvaluators<'a> = &'a dyn Fn(&Scene) -> Result<Vec<Arc<dyn Evaluator>>, String>;
@@ -307,9 +312,12 @@ pub fn compare(reference: &RenderOutput, centre: &[bool], out: &RenderOutput) ->
     }
 }
 
-/// Renders `scene` with the reference and every variant at `size`²
-/// (best of `repeats` timings each) and returns one row per render,
-/// the reference first, with the Pareto front marked.
+/// Renders `scene` with the reference and every variant at `size`² and
+/// returns one row per render, the reference first, with the Pareto front
+/// marked. Each variant's time is its best of `repeats` rounds, each
+/// round rendering every variant once in turn: a slow spell of a shared
+/// machine then costs every variant a round alike, where consecutive
+/// repeats of one variant let a spell skew the ratios between variants.
 pub fn sweep_scene(
     name: &str,
     scene: &Scene,
@@ -318,23 +326,13 @@ pub fn sweep_scene(
     variants: &[Variant],
     repeats: u32,
 ) -> Result<Vec<AccuracyRow>, AccuracyError> {
-    let run = |method: Method, aa: Aa, reps: u32| -> Result<RenderOutput, AccuracyError> {
+    let run = |method: Method, aa: Aa| -> Result<RenderOutput, AccuracyError> {
         let mut opts = RenderOptions::new(size, size);
         opts.method = method;
-        let mut best: Option<RenderOutput> = None;
-        for _ in 0..reps.max(1) {
-            let out = render_aa(scene, evaluators, &opts, aa)?;
-            if best
-                .as_ref()
-                .is_none_or(|b| out.stats.time_ms < b.stats.time_ms)
-            {
-                best = Some(out);
-            }
-        }
-        best.ok_or_else(|| AccuracyError::Scene("no render".into()))
+        Ok(render_aa(scene, evaluators, &opts, aa)?)
     };
-    let reference = run(REFERENCE.0, REFERENCE.1, 1)?;
-    let centre = run(Method::Pixel, Aa::None, 1)?.hit_mask;
+    let reference = run(REFERENCE.0, REFERENCE.1)?;
+    let centre = run(Method::Pixel, Aa::None)?.hit_mask;
     let row = |family: Family, param: &str, out: &RenderOutput| {
         let e = compare(&reference, &centre, out);
         AccuracyRow {
@@ -351,10 +349,23 @@ pub fn sweep_scene(
             pareto: false,
         }
     };
+    let mut best: Vec<Option<RenderOutput>> = variants.iter().map(|_| None).collect();
+    for _ in 0..repeats.max(1) {
+        for (v, b) in variants.iter().zip(&mut best) {
+            let out = run(v.method, v.aa)?;
+            if b.as_ref()
+                .is_none_or(|b| out.stats.time_ms < b.stats.time_ms)
+            {
+                *b = Some(out);
+            }
+        }
+    }
     let mut rows = vec![row(Family::Reference, "pixel+grid:16", &reference)];
-    for v in variants {
-        let out = run(v.method, v.aa, repeats)?;
-        rows.push(row(v.family, &v.param, &out));
+    for (v, out) in variants.iter().zip(&best) {
+        let out = out
+            .as_ref()
+            .ok_or_else(|| AccuracyError::Scene("no render".into()))?;
+        rows.push(row(v.family, &v.param, out));
     }
     mark_pareto(&mut rows[1..]);
     Ok(rows)
@@ -394,7 +405,9 @@ pub fn run_accuracy(
             || path.display().to_string(),
             |s| s.to_string_lossy().into(),
         );
-        rows.extend(sweep_scene(&name, &scene, &evals, size, &variants, 2)?);
+        rows.extend(sweep_scene(
+            &name, &scene, &evals, size, &variants, REPEATS,
+        )?);
     }
     write_csv(&rows, &out_dir.join("accuracy.csv"))?;
     plot(&rows, &out_dir.join("accuracy.png"))?;
