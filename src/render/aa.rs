@@ -546,7 +546,7 @@ impl Classified {
                 self.sampling[k] = Sampling::Full;
             }
             let s = self.sampling[k];
-            let bracketed = self.brackets[k].is_some() && (self.by_shading[k] || e);
+            let bracketed = self.brackets[k].is_some_and(|b| b.unique) && (self.by_shading[k] || e);
             st.aa_split_by_shading += u64::from(s.is_split() && bracketed);
             st.aa_split_covered += u64::from(s == Sampling::Covered);
         }
@@ -660,8 +660,10 @@ impl Ctx<'_, '_> {
             c.brackets[k] = d.bracket;
             return;
         }
+        // Only an included cell's bracket holds for its quarters' tests.
+        let inherited = d.bracket.filter(|br| br.unique);
         for q in b.quarters_by_row() {
-            self.block(c, q, (d.floor, d.bracket), st);
+            self.block(c, q, (d.floor, inherited), st);
         }
     }
 
@@ -726,18 +728,13 @@ impl Ctx<'_, '_> {
         ) else {
             // No inclusion bracket; the pixel may still be covered, with
             // its negative cross-section deeper in.
-            let covered = cover
-                && probe::bracket_end((ta, tb), t1, min_w, (&COVER_REACH, &[]), &mut whole)
-                    .is_some_and(|tc| {
-                        self.one_smooth_surface(
-                            &corners,
-                            &bounds,
-                            Interval::new(ta, tc),
-                            &mut st.stats,
-                        )
-                    });
+            let cover_bracket = cover
+                .then(|| probe::bracket_end((ta, tb), t1, min_w, (&COVER_REACH, &[]), &mut whole))
+                .flatten()
+                .and_then(|tc| self.cover_bracket(&corners, &bounds, (ta, tc), &mut st.stats));
             return Decision {
-                covered,
+                covered: cover_bracket.is_some(),
+                bracket: cover_bracket.flatten(),
                 ..decide(Cell::Split, Floor { at: ta, near: tb })
             };
         };
@@ -746,9 +743,15 @@ impl Ctx<'_, '_> {
         let smooth = on.map(|(narrow, _)| narrow);
         // A smooth answer either way (Smooth, or Shading with 2×2
         // sub-samples) leaves nothing for the covered test to decide.
-        let covered = smooth.is_none()
-            && cover
-            && self.one_smooth_surface(&corners, &bounds, Interval::new(ta, tb2), &mut st.stats);
+        let cover_bracket = (smooth.is_none() && cover)
+            .then(|| self.cover_bracket(&corners, &bounds, (ta, tb2), &mut st.stats))
+            .flatten();
+        let included = on.map(|(_, obj)| RootBracket {
+            a,
+            b,
+            obj,
+            unique: true,
+        });
         Decision {
             cell: if smooth == Some(true) {
                 Cell::Smooth
@@ -757,8 +760,8 @@ impl Ctx<'_, '_> {
             },
             floor: Floor { at: ta, near: tb },
             by_shading: smooth == Some(false),
-            covered,
-            bracket: on.map(|(_, obj)| RootBracket { a, b, obj }),
+            covered: cover_bracket.is_some(),
+            bracket: included.or(cover_bracket.flatten()),
         }
     }
 
@@ -854,24 +857,32 @@ impl Ctx<'_, '_> {
         Some((hb, only))
     }
 
-    // Whether the beam piece is inside the bounds with at most one object
-    // that may vanish there, whose normal cannot jump inside it (its
-    // function is proven continuously differentiable on the piece).
-    fn one_smooth_surface(
+    // Whether the beam piece `[ta, tc]` of a covered cell is inside the
+    // bounds with at most one object that may vanish there, whose normal
+    // cannot jump inside it (its function is proven continuously
+    // differentiable on the piece); if so, the bracket of every ray's
+    // first root that the cell's proofs give (None where no object may
+    // vanish). Not `unique`: the beam was not proven decreasing, so each
+    // ray tests its own segment (see [`RootBracket`]).
+    fn cover_bracket(
         &self,
         corners: &CornerRays,
         bounds: &IBox,
-        piece: Interval,
+        (ta, tc): (f64, f64),
         st: &mut RenderStats,
-    ) -> bool {
-        self.lone_object(corners, bounds, piece, st)
-            .is_some_and(|(hb, only)| {
-                only.is_none_or(|k| {
-                    self.tr.evals[k]
-                        .function()
-                        .is_some_and(|f| f.len() <= SMOOTH_TEST_MAX_OPS && smooth_on(f, hb))
-                })
-            })
+    ) -> Option<Option<RootBracket>> {
+        let (hb, only) = self.lone_object(corners, bounds, Interval::new(ta, tc), st)?;
+        let smooth = only.is_none_or(|k| {
+            self.tr.evals[k]
+                .function()
+                .is_some_and(|f| f.len() <= SMOOTH_TEST_MAX_OPS && smooth_on(f, hb))
+        });
+        smooth.then_some(only.map(|obj| RootBracket {
+            a: ta,
+            b: tc,
+            obj,
+            unique: false,
+        }))
     }
 
     // None unless one object alone may vanish on the beam piece and it

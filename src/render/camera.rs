@@ -295,6 +295,10 @@ pub struct CornerRays {
     // every piece of its sweep, and comparing the corners' bits there
     // cost more than the hull itself.
     shape: Shape,
+    // The hulls of the corners' origins and directions, also taken once
+    // (rebuilding them at each hull was a tenth of IAA's instructions).
+    origins: IBox,
+    directions: IBox,
 }
 
 // Which part of the ray the four corners share, to the bit.
@@ -318,7 +322,16 @@ impl CornerRays {
         } else {
             Shape::Neither
         };
-        CornerRays { rays, shape }
+        let hull4 = |part: fn(&(IBox, IBox)) -> IBox| {
+            let c = rays.map(|r| part(&r));
+            box_hull(box_hull(c[0], c[1]), box_hull(c[2], c[3]))
+        };
+        CornerRays {
+            rays,
+            shape,
+            origins: hull4(|r| r.0),
+            directions: hull4(|r| r.1),
+        }
     }
 
     /// Origin and direction enclosures, corner by corner.
@@ -338,8 +351,8 @@ impl CornerRays {
     pub fn hull(&self, t: Interval) -> IBox {
         let c = &self.rays;
         let (o, d) = match self.shape {
-            Shape::SharedDirection => (self.origins(), c[0].1),
-            Shape::SharedOrigin => (c[0].0, self.directions()),
+            Shape::SharedDirection => (self.origins, c[0].1),
+            Shape::SharedOrigin => (c[0].0, self.directions),
             Shape::Neither => return self.hull_of_corners(t),
         };
         box_hull(ray_point_box(o, d, t.lo), ray_point_box(o, d, t.hi))
@@ -383,15 +396,13 @@ impl CornerRays {
     /// A sound hull of the block's ray origins (affine in screen position,
     /// like the directions).
     pub fn origins(&self) -> IBox {
-        let c = &self.rays;
-        box_hull(box_hull(c[0].0, c[1].0), box_hull(c[2].0, c[3].0))
+        self.origins
     }
 
     /// A sound hull of the block's ray directions: the hull of the corner
     /// directions, since a ray's direction is affine in its screen position.
     pub fn directions(&self) -> IBox {
-        let c = &self.rays;
-        box_hull(box_hull(c[0].1, c[1].1), box_hull(c[2].1, c[3].1))
+        self.directions
     }
 }
 

@@ -58,13 +58,17 @@ pub(crate) struct TileSpec<'m> {
 }
 
 /// A bracket proven to hold the first root of every ray of a beam (IAA's
-/// pixel-area inclusion test, for the sub-samples of an included pixel
-/// split by shading or on a shadow edge): every object is positive along
-/// the rays before `a`;
+/// pixel-area tests, for the base sample and sub-samples of a pixel):
+/// every object is positive along the rays before `a`;
 /// over the beam's hull on `[a, b]`, inside the bounds, object `obj`
-/// alone may vanish, its cross-section is positive at `a` and negative at
-/// `b`, and it decreases strictly along every ray. So each ray's first
-/// hit is `obj`'s one root in `[a, b]`.
+/// alone may vanish, and its cross-section is positive at `a` and
+/// negative at `b`. So each ray's first hit is a root of `obj` in
+/// `[a, b]`. Where the beam was included, `obj` decreases strictly along
+/// every ray there (`unique`): each ray's first hit is its one root in
+/// `[a, b]`. A covered pixel's bracket is not `unique`: a ray is refined
+/// in it where `obj` is proven decreasing along that ray's own segment
+/// (one directional-derivative interval over a box a ray wide, where the
+/// pixel's hull was too wide to prove it), and traced as usual elsewhere.
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub(crate) struct RootBracket {
     /// Front end: f > 0 on every ray.
@@ -73,6 +77,9 @@ pub(crate) struct RootBracket {
     pub b: f64,
     /// The object hit.
     pub obj: usize,
+    /// Whether `obj` is proven strictly decreasing along every ray on
+    /// `[a, b]`.
+    pub unique: bool,
 }
 
 /// The shadow state of a nearby sample that a sample may reuse: IAA's
@@ -345,12 +352,31 @@ fn refine_bracketed(
             continue;
         }
         let live = [b.obj as u32];
-        if let Some(h) = super::refine::refine(tr, &tile.rays[k], &live, b.a, b.b, &mut st.stats) {
+        let ray = &tile.rays[k];
+        if !b.unique && !decreasing_along(tr, ray, b, &mut st.stats) {
+            continue;
+        }
+        if let Some(h) = super::refine::refine(tr, ray, &live, b.a, b.b, &mut st.stats) {
             tile.slabs[k] = None;
             hits.push((k, h));
         }
     }
     hits
+}
+
+// Whether object `b.obj` is proven strictly decreasing along `ray` over
+// `[b.a, b.b]`: then its one root there is the ray's first hit (see
+// `RootBracket`).
+fn decreasing_along(
+    tr: &Tracer<'_>,
+    ray: &super::camera::PixelRay,
+    b: &RootBracket,
+    st: &mut super::stats::RenderStats,
+) -> bool {
+    let bx = crate::interval::boxes::ray_box(ray.o, ray.d, Interval::new(b.a, b.b));
+    st.interval_evals += 1;
+    let dfdt = tr.evals[b.obj].interval_dir(bx, ray.d)[1];
+    !dfdt.is_empty() && dfdt.hi < 0.0
 }
 
 // The tile's pixel rays and their ranges inside the bounds, nothing traced.
