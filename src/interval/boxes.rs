@@ -46,9 +46,9 @@ pub fn box_meet(a: IBox, b: IBox) -> Option<IBox> {
 /// `o + t·d` for interval operands.
 pub fn ray_box(o: IBox, d: IBox, t: Interval) -> IBox {
     [
-        o[0].add(t.mul(d[0])),
-        o[1].add(t.mul(d[1])),
-        o[2].add(t.mul(d[2])),
+        o[0].add(d[0].mul_by_positive(t)),
+        o[1].add(d[1].mul_by_positive(t)),
+        o[2].add(d[2].mul_by_positive(t)),
     ]
 }
 

@@ -15,7 +15,7 @@ use glam::DVec3;
 
 use crate::interval::Interval;
 pub use crate::interval::boxes::IBox;
-use crate::interval::boxes::{box_hull, ray_point_box};
+use crate::interval::boxes::{box_hull, ray_box, ray_point_box};
 use crate::scene::{Bounds, Camera, Projection};
 
 /// Smallest depth tolerance, in t units.
@@ -355,6 +355,14 @@ impl CornerRays {
             Shape::SharedOrigin => (c[0].0, self.directions),
             Shape::Neither => return self.hull_of_corners(t),
         };
+        // For t > 0 the hull of the two ends is the box of the whole
+        // piece, bound for bound (each end's bounds are monotone in its
+        // product's, and the product's extremes over t are at its ends):
+        // one interval product per axis instead of two point products
+        // and a hull (a block's hull is taken at every piece of its sweep).
+        if t.lo > 0.0 {
+            return ray_box(o, d, t);
+        }
         box_hull(ray_point_box(o, d, t.lo), ray_point_box(o, d, t.hi))
     }
 
