@@ -71,7 +71,14 @@
 //! colour varies only with a continuous normal. Off shadow edges it gets
 //! one level fewer than the depth (at least 2×2). Most pixels IAA used to
 //! split were of this kind: on orthocircle at 256², 6,944 of 8,403 split
-//! pixels had every one of their 16 sub-samples hit.
+//! pixels had every one of their 16 sub-samples hit. The proof brackets
+//! each ray's first root in `[ta, tc]` but does not make it the only root
+//! there (the pixel's hull is too wide to prove the object decreasing):
+//! each of the pixel's rays, its base sample's and its sub-samples', is
+//! refined in that bracket where one directional-derivative interval over
+//! its own segment proves the decrease, and traced as usual elsewhere
+//! ([`RootBracket::unique`]). On orthocircle (threshold 1) that took 2,900
+//! of 8,000 single rays out of the base render.
 //!
 //! Every sub-sample, at whatever level, has the depth tolerance of the
 //! finest level (grid:2^depth's), and roots are refined to a sixteenth of
