@@ -38,7 +38,7 @@ pub const COVERAGE_TOLERANCE: f64 = 1.0 / 8.0;
 
 /// Rounds over every variant in [`run_accuracy`]; each time is the best
 /// of these.
-pub const REPEATS: u32 = 3;
+pub const REPEATS: u32 = 5;
 
 /// Builds one evaluator per scene object.
 pub type MakeEvaluators<'a> = &'a dyn Fn(&Scene) -> Result<Vec<Arc<dyn Evaluator>>, String>;
