@@ -382,6 +382,23 @@ proptest! {
             check(Interval::point(ax).pow(q), ax.powf(y), &format!("pow {ax:e} {y:e}"));
         }
     }
+
+    /// Ray boxes multiply by ray parameters with `mul_by_positive`, which
+    /// reads two of `mul`'s four products: by any interval of positive
+    /// numbers it must give `mul`'s bounds to the bit (and fall back to
+    /// `mul` by anything else).
+    #[test]
+    fn products_by_positive_intervals_are_muls_to_the_bit(
+        a in interval(),
+        lo in prop_oneof![1e-300..1e-6f64, 1e-3..100.0f64, 1.0..1e300f64, bound()],
+        w in prop_oneof![0.0..1e-9f64, 0.0..10.0f64, bound()],
+    ) {
+        let t = Interval::new(lo, lo + w.abs());
+        let bits = |i: Interval| (i.lo.to_bits(), i.hi.to_bits());
+        let fast = a.mul_by_positive(t);
+        prop_assert_eq!(bits(fast), bits(a.mul(t)), "{:?} · {:?}", a, t);
+        prop_assert_eq!(bits(fast), bits(t.mul(a)), "{:?} · {:?}", t, a);
+    }
 }
 
 // Zeros that are exact stay exact: a sum that rounds to 0 is exact (x + y
@@ -419,29 +436,4 @@ fn exact_zeros_are_not_rounded_out() {
         s.lo <= 3e-310 && s.hi >= 3e-310,
         "subnormal sums are exact: {s:?}"
     );
-}
-
-proptest! {
-    #![proptest_config(ProptestConfig {
-        cases: 3000,
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    })]
-
-    /// Ray boxes multiply by ray parameters with `mul_by_positive`, which
-    /// reads two of `mul`'s four products: by any interval of positive
-    /// numbers it must give `mul`'s bounds to the bit (and fall back to
-    /// `mul` by anything else).
-    #[test]
-    fn products_by_positive_intervals_are_muls_to_the_bit(
-        a in interval(),
-        lo in prop_oneof![1e-300..1e-6f64, 1e-3..100.0f64, 1.0..1e300f64, bound()],
-        w in prop_oneof![0.0..1e-9f64, 0.0..10.0f64, bound()],
-    ) {
-        let t = Interval::new(lo, lo + w.abs());
-        let bits = |i: Interval| (i.lo.to_bits(), i.hi.to_bits());
-        let fast = a.mul_by_positive(t);
-        prop_assert_eq!(bits(fast), bits(a.mul(t)), "{:?} · {:?}", a, t);
-        prop_assert_eq!(bits(fast), bits(t.mul(a)), "{:?} · {:?}", t, a);
-    }
 }
