@@ -5,9 +5,9 @@
 use rayon::prelude::*;
 
 use super::RenderOptions;
-use super::probe::Floor;
+use super::probe::{Floor, Rect};
 use super::stats::RenderStats;
-use super::tile::{RootBracket, ShadowHint, TileOut, TileSpec, render_tile};
+use super::tile::{RootBracket, ShadowHint, TileOut, TileSpec, render_tile, squares};
 use super::tracer::Tracer;
 
 // Averages each s×s block of a tile traced at s× resolution, in linear
@@ -108,25 +108,20 @@ pub(super) fn trace_split(
         progress: false,
         ..opts.clone()
     };
-    let squares: Vec<(u32, u32)> = (0..h)
-        .step_by(FINE_GROUP as usize)
-        .flat_map(|gy| (0..w).step_by(FINE_GROUP as usize).map(move |gx| (gx, gy)))
-        .collect();
-    let in_tile = |(gx, gy): (u32, u32), (i, j): (u32, u32)| ((gy + j) * w + gx + i) as usize;
-    let pixels = |(gx, gy): (u32, u32)| {
-        let (gw, gh) = (FINE_GROUP.min(w - gx), FINE_GROUP.min(h - gy));
-        (0..gh).flat_map(move |j| (0..gw).map(move |i| (i, j)))
-    };
+    let in_tile = |(i, j): (u32, u32)| (j * w + i) as usize;
+    let squares: Vec<Rect> = squares(w, h, FINE_GROUP).collect();
     // The squares are traced in parallel: a tile's split pixels can be
     // most of a render's work (a silhouette crossing few tiles), more than
     // one thread should carry.
-    let outs: Vec<((u32, u32), TileOut)> = squares
+    let outs: Vec<(Rect, TileOut)> = squares
         .par_iter()
-        .filter(|&&g| pixels(g).any(|p| split[in_tile(g, p)]))
+        .filter(|g| g.pixels().any(|p| split[in_tile(p)]))
         .map(|&g| {
-            let (gw, gh) = (FINE_GROUP.min(w - g.0), FINE_GROUP.min(h - g.1));
-            let (fw, fh) = (gw * f, gh * f);
-            let pixel = |k: usize| in_tile(g, ((k as u32 % fw) / f, (k as u32 / fw) / f));
+            let (fw, fh) = ((g.x1 - g.x0) * f, (g.y1 - g.y0) * f);
+            let pixel = |k: usize| {
+                let (i, j) = (k as u32 % fw, k as u32 / fw);
+                in_tile((g.x0 + i / f, g.y0 + j / f))
+            };
             let nf = (fw * fh) as usize;
             let mask: Vec<bool> = (0..nf).map(|k| split[pixel(k)]).collect();
             // Each sub-sample starts where its pixel's area was proven
@@ -136,8 +131,8 @@ pub(super) fn trace_split(
             let fine_brackets: Vec<Option<RootBracket>> =
                 (0..nf).map(|k| brackets[pixel(k)]).collect();
             let spec = TileSpec {
-                x0: (x0 + g.0) * f,
-                y0: (y0 + g.1) * f,
+                x0: (x0 + g.x0) * f,
+                y0: (y0 + g.y0) * f,
                 w: fw,
                 h: fh,
                 mask: Some(&mask),
@@ -153,8 +148,9 @@ pub(super) fn trace_split(
         .collect();
     for (g, out) in &outs {
         stats.merge(&out.state.stats);
-        for (q, p) in pixels(*g).enumerate() {
-            let k = in_tile(*g, p);
+        // Row by row, as the downsampled square's pixels.
+        for (q, p) in g.pixels().enumerate() {
+            let k = in_tile(p);
             linear[k] = out.linear[q];
             coverage[k] = out.coverage[q];
             depth[k] = out.depth[q];

@@ -480,9 +480,9 @@ pub(crate) fn tile_depths(tr: &Tracer<'_>, tile: &TileRays) -> Option<Interval> 
 /// short of the silhouettes, left 23k.
 const SHADOW_GROUP: u32 = 4;
 
-// The `side`×`side` squares of a `w`×`h` tile, row by row (clipped at its
-// right and bottom sides).
-fn squares(w: u32, h: u32, side: u32) -> impl Iterator<Item = Rect> {
+/// The `side`×`side` squares of a `w`×`h` tile, row by row (clipped at
+/// its right and bottom sides).
+pub(crate) fn squares(w: u32, h: u32, side: u32) -> impl Iterator<Item = Rect> {
     (0..h).step_by(side as usize).flat_map(move |y0| {
         (0..w).step_by(side as usize).map(move |x0| Rect {
             x0,
