@@ -864,6 +864,14 @@ impl Ctx<'_, '_> {
         Some((hb, only))
     }
 
+    // Whether object k is proven continuously differentiable over `hb`
+    // (`ir::prune::smooth_on`), so that no crease crosses the cell.
+    fn crease_free(&self, k: usize, hb: IBox) -> bool {
+        self.tr.evals[k]
+            .function()
+            .is_some_and(|f| f.len() <= SMOOTH_TEST_MAX_OPS && smooth_on(f, hb))
+    }
+
     // Whether the beam piece `[ta, tc]` of a covered cell is inside the
     // bounds with at most one object that may vanish there, whose normal
     // cannot jump inside it (its function is proven continuously
@@ -879,11 +887,7 @@ impl Ctx<'_, '_> {
         st: &mut RenderStats,
     ) -> Option<Option<RootBracket>> {
         let (hb, only) = self.lone_object(corners, bounds, Interval::new(ta, tc), st)?;
-        let smooth = only.is_none_or(|k| {
-            self.tr.evals[k]
-                .function()
-                .is_some_and(|f| f.len() <= SMOOTH_TEST_MAX_OPS && smooth_on(f, hb))
-        });
+        let smooth = only.is_none_or(|k| self.crease_free(k, hb));
         smooth.then_some(only.map(|obj| RootBracket {
             a: ta,
             b: tc,
@@ -950,10 +954,7 @@ impl Ctx<'_, '_> {
             // Sampled 2×2 only where no crease can cross the cell (as for
             // covered cells): a 2×2 mean is only right for a colour that
             // varies smoothly over the pixel.
-            let smooth = tr.evals[k]
-                .function()
-                .is_some_and(|f| f.len() <= SMOOTH_TEST_MAX_OPS && smooth_on(f, hb));
-            return smooth.then_some(false);
+            return self.crease_free(k, hb).then_some(false);
         }
         let g = tr.interval_grad(k, hb, st);
         if !g.d.iter().all(|d| d.lo.is_finite() && d.hi.is_finite()) {

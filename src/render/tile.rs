@@ -374,8 +374,7 @@ fn decreasing_along(
     st: &mut super::stats::RenderStats,
 ) -> bool {
     let bx = crate::interval::boxes::ray_box(ray.o, ray.d, Interval::new(b.a, b.b));
-    st.interval_evals += 1;
-    let dfdt = tr.evals[b.obj].interval_dir(bx, ray.d)[1];
+    let dfdt = tr.interval_dir(b.obj, bx, ray.d, st)[1];
     !dfdt.is_empty() && dfdt.hi < 0.0
 }
 
