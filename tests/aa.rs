@@ -276,12 +276,13 @@ fn plain_and_loosest_iaa(name: &str, text: &str, n: u32) -> (RenderOutput, Rende
 
 /// A straight shadow edge that runs along the border between two tiles
 /// (a plate's shadow, seen from straight above, the edge between pixel
-/// columns 31 and 32): each side's only differing neighbour is in the
-/// other tile, which the base render of the tile beside provides.
+/// columns 31 and 32, x = 2/3, cast by the plate's top inner edge at
+/// x = 2/3 + 1.05, y = 1.05): each side's only differing neighbour is in
+/// the other tile, which the base render of the tile beside provides.
 #[test]
 fn iaa_splits_shadow_edges_along_tile_borders() {
     let text = "object ground = y;\n\
-                object plates = max(max(y - 1.05, 0.95 - y), min(5/3 - x, x + 5/3));\n\
+                object plates = max(max(y - 1.05, 0.95 - y), min(1.7166666666666666 - x, x + 1.7166666666666666));\n\
                 camera { eye = (0, 6, 0); target = (0, 0, 0); up = (0, 0, -1); ortho = 4; }\n\
                 bounds = (-2, -0.5, -2) .. (2, 2, 2);\n\
                 light { direction = (-1, -1, 0); color = (1, 1, 1); shadows = true; }\n";

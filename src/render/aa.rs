@@ -120,6 +120,7 @@ use std::fmt;
 
 use super::camera::{CornerRays, RayGrid, bounds_box};
 use super::probe::{self, Floor, Form, Rect, Sweep};
+use super::proof;
 use super::shade::colour_interval;
 use super::stats::RenderStats;
 use super::tile::RootBracket;
@@ -942,8 +943,7 @@ impl Ctx<'_, '_> {
         // enclosure anyway, and the cell is included only where it proves
         // the decrease.
         if self.threshold >= 1.0 {
-            let dfdt = tr.interval_dir(k, hb, dirs, st)[1];
-            if dfdt.is_empty() || dfdt.hi >= 0.0 {
+            if !proof::decreasing(tr.interval_dir(k, hb, dirs, st)[1]) {
                 return None;
             }
             let g = tr.interval_grad(k, hb, st);
@@ -960,8 +960,7 @@ impl Ctx<'_, '_> {
         if !g.d.iter().all(|d| d.lo.is_finite() && d.hi.is_finite()) {
             return None;
         }
-        let dfdt = dot(&g.d, &dirs);
-        if dfdt.is_empty() || dfdt.hi >= 0.0 {
+        if !proof::decreasing(dot(&g.d, &dirs)) {
             return None;
         }
         let nout = normalize_box(&g.d)?;

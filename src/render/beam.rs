@@ -28,6 +28,7 @@
 
 use super::camera::{CornerRays, PixelRay, RayGrid};
 use super::probe::{self, Floor, Form, Rect, Sweep};
+use super::proof;
 use super::ray::{scene_point, trace_ray, trace_ray_near_first};
 use super::refine::{Bracket, refine_batch, scene_points};
 use super::stats::RenderStats;
@@ -409,7 +410,7 @@ fn decreasing(
 ) -> bool {
     let hb = corners.hull(t);
     let dirs = corners.directions();
-    let positive = |f: Interval| f.is_empty() || f.lo > 0.0;
+    let positive = proof::holds_no_surface;
     // The one directional partial, in forward mode: half the work of the
     // gradient, and usually tighter than its dot product with `dirs` (the
     // chain rule factored rather than expanded).
@@ -417,7 +418,7 @@ fn decreasing(
         // One object: the derivative's pass encloses its value too, so the
         // separate interval evaluation is saved.
         let [f, dfdt] = tr.interval_dir(k as usize, hb, dirs, st);
-        return positive(f) || dfdt.hi <= 0.0;
+        return positive(f) || proof::non_increasing(dfdt);
     }
     live.iter().all(|&k| {
         // Several: most are positive over the piece, for one interval each.
@@ -425,7 +426,7 @@ fn decreasing(
             return true;
         }
         let [_, dfdt] = tr.interval_dir(k as usize, hb, dirs, st);
-        dfdt.hi <= 0.0
+        proof::non_increasing(dfdt)
     })
 }
 
@@ -518,6 +519,7 @@ fn all_start_inside(
             obj,
             inside: true,
             grad: None,
+            front: None,
         });
     }
     true

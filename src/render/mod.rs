@@ -51,6 +51,7 @@ mod groups;
 pub mod output;
 mod plane;
 mod probe;
+mod proof;
 pub mod ray;
 mod refine;
 pub mod shade;
@@ -238,6 +239,12 @@ pub struct Hit {
     /// (pruning is exact, so the bits are those of any other evaluator).
     /// None where shading takes it.
     pub grad: Option<[f64; 3]>,
+    /// The front end of the root's last bracket: a point of the ray
+    /// within the refinement tolerance before the hit where every live
+    /// object was evaluated positive (outside every solid), where its
+    /// shadow segments start. None where no such point is known: a cut
+    /// face, or a contact drawn by the tangency policy.
+    pub front: Option<f64>,
 }
 
 /// How a pixel was decided.

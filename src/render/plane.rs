@@ -366,6 +366,7 @@ fn settle(
                 obj,
                 inside: true,
                 grad: None,
+                front: None,
             });
         } else {
             rest.push((k, (t0, t1), ray));

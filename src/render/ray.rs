@@ -78,6 +78,7 @@ pub(crate) fn starts_inside(
         obj,
         inside: true,
         grad: None,
+        front: None,
     })
 }
 
@@ -300,6 +301,7 @@ fn narrow_hit(
         obj,
         inside: false,
         grad: None,
+        front: None,
     }
 }
 
@@ -422,6 +424,7 @@ pub(crate) fn march(
                 obj,
                 inside: false,
                 grad: None,
+                front: None,
             }));
         }
         prev_t = t;
@@ -540,6 +543,7 @@ mod tests {
                 obj: 0,
                 inside: true,
                 grad: None,
+                front: None,
             })
         );
     }

@@ -25,13 +25,26 @@ const MAX_REFINE_STEPS: usize = 200;
 /// (Illinois false position, with a bisection step every fourth iteration
 /// so the bracket always shrinks).
 pub(crate) fn illinois(
-    mut f: impl FnMut(f64) -> f64,
+    f: impl FnMut(f64) -> f64,
     a: f64,
     b: f64,
     fa: f64,
     fb: f64,
     tol: f64,
 ) -> f64 {
+    illinois_bracketed(f, a, b, fa, fb, tol).0
+}
+
+/// [`illinois`], with the front end of the last bracket: a point within
+/// `tol` of the root where f was evaluated positive.
+pub(crate) fn illinois_bracketed(
+    mut f: impl FnMut(f64) -> f64,
+    a: f64,
+    b: f64,
+    fa: f64,
+    fb: f64,
+    tol: f64,
+) -> (f64, f64) {
     let mut s = Illinois::new(a, b, fa, fb);
     for it in 0..MAX_REFINE_STEPS {
         if s.narrow(tol) {
@@ -40,7 +53,7 @@ pub(crate) fn illinois(
         let c = s.next(it, tol);
         s.update(c, f(c));
     }
-    s.root()
+    (s.root(), s.front())
 }
 
 /// The state of one [`illinois`] search, stepped from outside so that many
@@ -143,6 +156,11 @@ impl Illinois {
     pub(crate) fn root(&self) -> f64 {
         0.5 * (self.a + self.b)
     }
+
+    /// The bracket's front end, where f was evaluated positive.
+    pub(crate) fn front(&self) -> f64 {
+        self.a
+    }
 }
 
 /// The scene function's point values at `a` and `b` on the ray, when they
@@ -173,7 +191,7 @@ pub(crate) fn refine(
     let (fa, fb) = sign_change(tr, ray, live, (a, b), st)?;
     let tol = tr.cam.root_tolerance(a);
     let mut evals = 0u64;
-    let t = illinois(
+    let (t, front) = illinois_bracketed(
         |t| {
             evals += live.len() as u64;
             let p = ray.at(t);
@@ -195,6 +213,7 @@ pub(crate) fn refine(
         obj,
         inside: false,
         grad: Some(tr.point_grad(obj, p, st).d),
+        front: Some(front),
     })
 }
 
@@ -355,6 +374,7 @@ pub(crate) fn refine_batch(
             obj,
             inside: false,
             grad: Some(grad.d),
+            front: Some(s.front()),
         });
     }
     out

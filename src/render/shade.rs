@@ -6,11 +6,12 @@
 use glam::DVec3;
 
 use super::camera::{normalize, normalize_with_length};
+use super::proof;
 use super::refine::illinois;
 use super::shadow::{SegEnd, light_dir, point_segment_free};
 use super::tracer::{TileState, Tracer};
 use crate::interval::Interval;
-use crate::interval::boxes::{IBox, dot as dot_box, normalize_box};
+use crate::interval::boxes::{IBox, dot as dot_box, normalize_box, point_box};
 use crate::render::stats::RenderStats;
 use crate::scene::LightKind;
 
@@ -28,7 +29,7 @@ pub(crate) struct Surf {
     pub p: DVec3,
     /// Unit normal facing the viewer.
     pub n: DVec3,
-    /// Shadow segment start.
+    /// Shadow segment start: proven outside every solid, next to `p`.
     pub q: DVec3,
     /// Unit vector towards the eye.
     pub v: DVec3,
@@ -104,14 +105,16 @@ pub(crate) fn surface(
     let p = DVec3::from_array(ray.at(hit.t));
     let (dm, dm_len) = normalize_with_length(DVec3::from_array(ray.dm));
     let v = -dm.unwrap_or(DVec3::Z);
-    let eps = (1e-4 * tr.diag).max(2.0 * tr.cam.tolerance(hit.t) * dm_len);
+    let eps = offset_length(tr, hit.t, dm_len);
     let color = DVec3::from_array(tr.colors[hit.obj]);
     if hit.inside {
-        // A cut face at the bounds: face the viewer, start shadows in front.
+        // A cut face at the bounds: face the viewer; its shadow segments
+        // start on the face itself (inside the solid, which shadows it
+        // wherever the light shines into the bounds).
         return Surf {
             p,
             n: v,
-            q: p + v * eps,
+            q: p,
             v,
             min_w: 0.5 * eps,
             color,
@@ -124,15 +127,53 @@ pub(crate) fn surface(
     let (nout, grad_len) = normalize_with_length(DVec3::from_array(d));
     let nout = nout.unwrap_or(v);
     let n = if nout.dot(v) < 0.0 { -nout } else { nout };
+    // Shadow segments start where the root's bracket was proven outside
+    // every solid, within the refinement tolerance of the surface; only a
+    // contact drawn by the tangency policy, which has no such point,
+    // starts `eps` (about half a pixel) off the surface along the normal.
+    let q = match hit.front {
+        Some(t) => DVec3::from_array(ray.at(segment_start(tr, ray, hit.obj, t, st))),
+        None => p + nout * eps,
+    };
     Surf {
         p,
         n,
-        q: p + nout * eps,
+        q,
         v,
         min_w: 0.5 * eps,
         color,
         grad_len,
     }
+}
+
+/// How far off the surface a hit's shadow segments start where no point
+/// proven outside is at hand, and twice the shadow sweep's resolution:
+/// twice the depth tolerance at `t` (`dm_len`: the length of the ray's
+/// direction), or a 10⁴th of the bounds' diagonal.
+fn offset_length(tr: &Tracer<'_>, t: f64, dm_len: f64) -> f64 {
+    (1e-4 * tr.diag).max(2.0 * tr.cam.tolerance(t) * dm_len)
+}
+
+/// Where on the ray a hit's shadow segments start: its bracket's front
+/// end `front`, where f was evaluated positive, or, where rounding leaves
+/// f's enclosure there straddling 0 (a secant step can land within an
+/// ulp of a planar face), the first of a few points up to one root
+/// tolerance further out where the enclosure proves f positive. A start
+/// not proven outside costs the shadow sweep its monotonicity test on
+/// the first piece, and the point a shadow.
+fn segment_start(
+    tr: &Tracer<'_>,
+    ray: &super::camera::PixelRay,
+    obj: usize,
+    front: f64,
+    st: &mut RenderStats,
+) -> f64 {
+    let tol = tr.cam.root_tolerance(front);
+    [0.0, 0.125, 0.5, 1.0]
+        .into_iter()
+        .map(|k| front - k * tol)
+        .find(|&t| proof::outside_at(tr.interval(obj, point_box(ray.at(t)), st)))
+        .unwrap_or(front)
 }
 
 /// Below this fraction of the largest gradient of the same object among a
@@ -197,7 +238,13 @@ pub(crate) fn mend_singular_normals(
         let Some(nout) = normalize(DVec3::from_array(g.d)) else {
             continue;
         };
-        let eps = (surf.q - surf.p).length();
+        // Where the gradient nearly vanishes on the surface, no
+        // monotonicity proof can start at it (f grows like the cube of the
+        // distance there), and a segment from the bracket's front would be
+        // drawn shadowed: such hits alone start their shadow segments
+        // `eps` (about half a pixel) off the surface along the normal.
+        let dm_len = DVec3::from_array(ray.dm).length();
+        let eps = offset_length(tr, hit.t, dm_len);
         surf.n = if nout.dot(surf.v) < 0.0 { -nout } else { nout };
         surf.q = p + nout * eps;
         surf.p = p;

@@ -1,20 +1,23 @@
 //! Guaranteed shadows.
 //!
 //! A point is lit by a shadow-casting light only if the segment from it to
-//! the light is proven free of surface. The segment starts at
-//! `q = p + ε·n` (n the outward unit gradient) with
-//! `ε = max(1e-4 · bounds diagonal, 2 · depth tolerance · |d|)`, so `q` is
-//! off the surface even with the depth error of the hit. The segment (for a
-//! directional light: up to twice the bounds diagonal, then clipped to the
-//! bounds, outside which there is no surface) is bisected; a piece is free
-//! when every object's interval over it (clipped to the bounds) is strictly
-//! positive, or when every object that may vanish there is proven
-//! increasing along the segment (interval gradient · segment direction > 0)
-//! and every object is proven positive at the piece's start (at q: an
-//! interval test of q; further on: the previous piece was proven positive
-//! up to its end, by the interval test inside the bounds or by the
-//! monotonicity test anywhere). A piece shorter than ε/2 that is not free,
-//! or an exhausted budget, means shadow.
+//! the light is proven free of surface. The segment starts at `q`, the
+//! front end of the hit's root bracket: a point of its ray within the
+//! refinement tolerance of the surface where every object was evaluated
+//! positive (see `shade::surface` for the exceptions: cut faces start on
+//! the face, tangential contacts and singular hits half a pixel out). The
+//! segment (for a directional light: up to twice the bounds diagonal,
+//! then clipped to the bounds, outside which there is no surface) is
+//! bisected front to back; a piece is free when every object's interval
+//! over it (clipped to the bounds) holds no surface, or when every object
+//! that may vanish there is proven increasing along the segment (a finite,
+//! positive derivative bound) from a start where it is proven positive:
+//! at q by an interval evaluation of q; further on, by the piece before
+//! having been proven increasing, or by an interval evaluation of the
+//! piece's start (a rejected piece proves nothing about what follows it:
+//! f may be undefined at its end, see `super::proof`). A piece shorter
+//! than the resolution (a depth tolerance, about a quarter pixel) that
+//! is not free, or an exhausted budget, means shadow.
 //!
 //! In a scene large enough to prune, a piece runs the evaluators of the
 //! smallest cell of a loose octree over the bounds that holds it (see
@@ -42,6 +45,7 @@ use glam::DVec3;
 use super::camera::{bounds_box, normalize};
 use super::cells::{self, CellTapes};
 use super::probe;
+use super::proof;
 use super::shade::Surf;
 use super::tracer::{TileState, Tracer};
 use crate::interval::Interval;
@@ -203,7 +207,8 @@ fn sweep_segments(
     };
     let mut sweep = Sweep {
         pieces: 0,
-        front_ok: None,
+        front: Front::Starts,
+        starts_outside: Vec::new(),
         blocked_at: None,
     };
     // The sweep starts from the pieces of bisection level k, about an
@@ -250,13 +255,27 @@ struct Segments<'s> {
 // The state of one front-to-back sweep, across nested calls.
 struct Sweep {
     pieces: usize,
-    // Pieces are settled front to back and contiguously, so when a piece
-    // is popped everything before it is free; `front_ok` says, in
-    // addition, that every object is proven positive at the piece's start
-    // on every segment (None at s = 0 until the start points are checked).
-    front_ok: Option<bool>,
+    // What is proven at the start of the next piece (pieces are settled
+    // front to back and contiguously).
+    front: Front,
+    // Per object: whether every start point is proven outside it (None:
+    // not checked yet).
+    starts_outside: Vec<Option<bool>>,
     // Where along the segments a point inside a solid was found.
     blocked_at: Option<f64>,
+}
+
+// What is proven of the objects at the start of the next piece.
+#[derive(Copy, Clone, PartialEq, Eq)]
+enum Front {
+    // The segments' start points (s = 0): checked once, when first needed.
+    Starts,
+    // Every object positive: the piece before was proven increasing from
+    // a positive start (see `proof`).
+    Outside,
+    // Nothing: the piece before was rejected, which proves nothing about
+    // its end (f may be undefined there, see `proof`).
+    Unknown,
 }
 
 impl Segments<'_> {
@@ -268,7 +287,7 @@ impl Segments<'_> {
     // the smallest cell holding it. Pruning is exact, so the nesting changes the cost
     // of the evaluations and the tightness of their intervals, not the
     // order in which pieces are visited.
-    // One front-to-back loop: every branch reads or sets `front_ok`, which
+    // One front-to-back loop: every branch reads or sets `front`, which
     // holds only because pieces are popped in order, so the loop stays whole.
     fn free(
         &self,
@@ -288,7 +307,7 @@ impl Segments<'_> {
             let bx: IBox = std::array::from_fn(|i| self.q[i].add(s.mul(self.delta[i])));
             let Some(clip) = box_meet(bx, self.bounds) else {
                 // Wholly outside the bounds: no surface, but nothing known of f.
-                sw.front_ok = Some(false);
+                sw.front = Front::Unknown;
                 continue;
             };
             // A piece narrower than the current cell's by the ratio is
@@ -305,23 +324,21 @@ impl Segments<'_> {
                 // narrower by the same ratio.
                 scope = c - a;
             }
-            let inside_bounds = clip == bx;
             let mut maybe: Vec<usize> = Vec::new();
             for k in 0..n {
-                let f = tr.interval(k, clip, &mut st.stats);
-                if !(f.is_empty() || f.lo > 0.0) {
+                if !proof::holds_no_surface(tr.interval(k, clip, &mut st.stats)) {
                     maybe.push(k);
                 }
             }
             if maybe.is_empty() {
-                sw.front_ok = Some(inside_bounds);
+                sw.front = Front::Unknown;
                 continue;
             }
             match self.piece(tr, (a, c), bx, &maybe, sw, &mut st.stats) {
                 Piece::Blocked => return false,
                 // Positive at its start and increasing over its whole box
                 // (not only the part inside the bounds): positive at its end.
-                Piece::Increasing => sw.front_ok = Some(true),
+                Piece::Increasing => sw.front = Front::Outside,
                 Piece::Open if (c - a) * self.len <= self.min_w => return false,
                 Piece::Open => {
                     let m = 0.5 * (a + c);
@@ -364,16 +381,29 @@ impl Segments<'_> {
         }
         // Positive at the start and increasing along every segment over
         // the piece: positive on the whole piece.
-        let ok = match sw.front_ok {
-            Some(v) => v,
-            None => {
-                let v = self
-                    .starts
-                    .iter()
-                    .all(|&p| start_state(tr, p.to_array(), st) == Some(true));
-                sw.front_ok = Some(v);
-                v
-            }
+        let ok = match sw.front {
+            Front::Outside => true,
+            // Only the objects that may vanish on the piece need be outside
+            // at its start: the others hold no surface there, whatever
+            // their sign at its start (f may be undefined there).
+            Front::Starts => maybe.iter().all(|&k| {
+                if sw.starts_outside.len() <= k {
+                    sw.starts_outside.resize(k + 1, None);
+                }
+                *sw.starts_outside[k].get_or_insert_with(|| {
+                    self.starts
+                        .iter()
+                        .all(|&p| outside_all(tr, p.to_array(), std::iter::once(k), st))
+                })
+            }),
+            // One segment: its point at the piece's start.
+            Front::Unknown => match self.starts {
+                &[s0] => {
+                    let p = (s0 + a * self.end.from(s0)).to_array();
+                    outside_all(tr, p, maybe.iter().copied(), st)
+                }
+                _ => false,
+            },
         };
         // The monotonicity test waits for narrower pieces while it would
         // run a long tape (see `MONOTONE_DEFER_OPS`).
@@ -386,7 +416,7 @@ impl Segments<'_> {
             && maybe.iter().all(|&k| affordable(k))
             && maybe
                 .iter()
-                .all(|&k| tr.interval_dir(k, bx, self.delta, st)[1].lo > 0.0)
+                .all(|&k| proof::increasing(tr.interval_dir(k, bx, self.delta, st)[1]))
         {
             return Piece::Increasing;
         }
@@ -418,21 +448,16 @@ enum Piece {
     Open,
 }
 
-/// Whether the point q is proven outside every object (Some(true)),
-/// proven inside one (Some(false)), or undecided (None).
-pub(crate) fn start_state(tr: &Tracer<'_>, q: [f64; 3], st: &mut RenderStats) -> Option<bool> {
-    let b = point_box(q);
-    let mut all_pos = true;
-    for k in 0..tr.evals.len() {
-        let f = tr.interval(k, b, st);
-        if f.hi < 0.0 {
-            return Some(false);
-        }
-        if !(f.is_empty() || f.lo > 0.0) {
-            all_pos = false;
-        }
-    }
-    all_pos.then_some(true)
+// Whether the point `p` is proven outside each of `objects`: each defined
+// and positive there (see `proof::outside_at`).
+fn outside_all(
+    tr: &Tracer<'_>,
+    p: [f64; 3],
+    mut objects: impl Iterator<Item = usize>,
+    st: &mut RenderStats,
+) -> bool {
+    let b = point_box(p);
+    objects.all(|k| proof::outside_at(tr.interval(k, b, st)))
 }
 
 #[cfg(test)]

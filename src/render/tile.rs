@@ -374,8 +374,7 @@ fn decreasing_along(
     st: &mut super::stats::RenderStats,
 ) -> bool {
     let bx = crate::interval::boxes::ray_box(ray.o, ray.d, Interval::new(b.a, b.b));
-    let dfdt = tr.interval_dir(b.obj, bx, ray.d, st)[1];
-    !dfdt.is_empty() && dfdt.hi < 0.0
+    super::proof::decreasing(tr.interval_dir(b.obj, bx, ray.d, st)[1])
 }
 
 // The tile's pixel rays and their ranges inside the bounds, nothing traced.
@@ -791,6 +790,7 @@ mod tests {
                 obj,
                 inside: true,
                 grad: None,
+                front: None,
             };
             let mut st = TileState::default();
             let s = shade::surface(&tr, &ray, &hit, &mut st.stats);

@@ -12,6 +12,7 @@
 //! covers the renderer's refinement tolerance and no more (a pixel's 32nd).
 
 mod certify;
+mod edges;
 mod scenes;
 
 use std::sync::Arc;

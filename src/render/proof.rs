@@ -1,0 +1,113 @@
+//! What an interval evaluation proves, for every front-to-back search
+//! (single rays and block sweeps, shadow segments and shadow beams, IAA's
+//! pixel-area tests, the inclusion and monotonicity tests): one rule, in
+//! one place.
+//!
+//! Partial domains make two readings of an enclosure unsound:
+//! - An undefined piece (EMPTY) or one positive wherever f is defined holds
+//!   no surface, but proves nothing about what follows it: f may be
+//!   undefined at the piece's end and enter its domain already negative
+//!   (the face of `sqrt(y) - 0.2` at y = 0 is such a domain edge). So no
+//!   search carries "positive here" past a piece it rejected: positivity
+//!   at a point is proven only by an enclosure of f at that point that is
+//!   defined ([`outside_at`]), or by a monotonicity proof ending there.
+//! - A derivative enclosure with an infinite (or NaN) bound proves no
+//!   monotonicity: it is what the evaluators give at a domain edge
+//!   (`sqrt`, `ln`, `asin`, `acos`, `pow`), at a pole and at a jump
+//!   (`floor`, `mod`, `atan2`'s cut), where f need not be continuous.
+//!
+//! What remains assumed: a domain edge hidden by a `min` or `max` that
+//! takes its other operand over a whole piece (the other operand's
+//! derivative is then the only one computed) is not seen.
+
+use crate::interval::Interval;
+
+/// Whether f's enclosure over a piece proves it holds no surface: f is
+/// undefined on all of it, or positive wherever it is defined.
+pub(crate) fn holds_no_surface(f: Interval) -> bool {
+    f.is_empty() || f.lo > 0.0
+}
+
+/// Whether f's enclosure at a point proves the point outside the solid:
+/// f defined and positive there (EMPTY, undefined, proves nothing).
+pub(crate) fn outside_at(f: Interval) -> bool {
+    !f.is_empty() && f.lo > 0.0
+}
+
+/// Whether a derivative enclosure proves f strictly increasing: a
+/// positive lower bound and a finite upper one.
+pub(crate) fn increasing(d: Interval) -> bool {
+    d.lo > 0.0 && d.hi < f64::INFINITY
+}
+
+/// Whether a derivative enclosure proves f strictly decreasing.
+pub(crate) fn decreasing(d: Interval) -> bool {
+    d.hi < 0.0 && d.lo > f64::NEG_INFINITY
+}
+
+/// Whether a derivative enclosure proves f non-increasing.
+pub(crate) fn non_increasing(d: Interval) -> bool {
+    d.hi <= 0.0 && d.lo > f64::NEG_INFINITY
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::eval::Evaluator;
+    use crate::eval::interp::Interpreter;
+    use crate::ir::{Builder, UnaryOp, Var};
+
+    // sqrt(y) - 0.2 over a box straddling its domain edge y = 0: its
+    // derivative along y is unbounded there, so no monotonicity is proven,
+    // though f jumps from undefined to -0.2; away from the edge it is.
+    #[test]
+    fn a_domain_edge_proves_no_monotonicity() {
+        let mut b = Builder::new();
+        let y = b.var(Var::Y);
+        let s = b.unary(UnaryOp::Sqrt, y);
+        let c = b.constant(0.2);
+        let f = b.binary(crate::ir::BinaryOp::Sub, s, c);
+        let e = Interpreter::new(b.finish(f));
+        let up = [
+            Interval::point(0.0),
+            Interval::point(1.0),
+            Interval::point(0.0),
+        ];
+        let across = [
+            Interval::point(0.0),
+            Interval::new(-0.5, 0.5),
+            Interval::point(0.0),
+        ];
+        let [v, d] = e.interval_dir(across, up);
+        assert!(v.lo <= -0.2 && !increasing(d), "{v:?} {d:?}");
+        let away = [
+            Interval::point(0.0),
+            Interval::new(0.5, 1.0),
+            Interval::point(0.0),
+        ];
+        assert!(increasing(e.interval_dir(away, up)[1]));
+        // Undefined below the edge: no surface there, and not outside.
+        let below = [
+            Interval::point(0.0),
+            Interval::point(-0.1),
+            Interval::point(0.0),
+        ];
+        let fb = e.interval(below);
+        assert!(holds_no_surface(fb) && !outside_at(fb));
+    }
+
+    #[test]
+    fn infinite_or_empty_bounds_prove_nothing() {
+        let inf = f64::INFINITY;
+        for d in [Interval::new(1.0, inf), Interval::EMPTY, Interval::ENTIRE] {
+            assert!(!increasing(d), "{d:?}");
+        }
+        for d in [Interval::new(-inf, -1.0), Interval::EMPTY] {
+            assert!(!decreasing(d) && !non_increasing(d), "{d:?}");
+        }
+        assert!(increasing(Interval::new(1.0, 2.0)));
+        assert!(decreasing(Interval::new(-2.0, -1.0)));
+        assert!(non_increasing(Interval::new(-2.0, 0.0)));
+        assert!(!outside_at(Interval::EMPTY) && outside_at(Interval::point(1e-300)));
+    }
+}
