@@ -854,7 +854,7 @@ impl Ctx<'_, '_> {
         let mut only = None;
         for k in 0..tr.evals.len() {
             let f = tr.interval(k, hb, st);
-            if f.is_empty() || f.lo > 0.0 {
+            if proof::holds_no_surface(f) {
                 continue;
             }
             if only.is_some() {
@@ -947,7 +947,7 @@ impl Ctx<'_, '_> {
                 return None;
             }
             let g = tr.interval_grad(k, hb, st);
-            let finite = g.d.iter().all(|d| d.lo.is_finite() && d.hi.is_finite());
+            let finite = g.d.iter().all(|&d| proof::bounded(d));
             if finite && dot(&g.d, &dirs).hi < 0.0 {
                 return Some(true);
             }
@@ -957,7 +957,7 @@ impl Ctx<'_, '_> {
             return self.crease_free(k, hb).then_some(false);
         }
         let g = tr.interval_grad(k, hb, st);
-        if !g.d.iter().all(|d| d.lo.is_finite() && d.hi.is_finite()) {
+        if !g.d.iter().all(|&d| proof::bounded(d)) {
             return None;
         }
         if !proof::decreasing(dot(&g.d, &dirs)) {

@@ -308,7 +308,7 @@ fn beam_tests(
             .copied()
             .filter(|&k| {
                 let v = tr.interval(k as usize, rest, &mut st.stats);
-                !(v.is_empty() || v.lo > 0.0)
+                !proof::holds_no_surface(v)
             })
             .collect()
     };
@@ -335,7 +335,7 @@ pub(crate) fn clear_boxes(
     for &o in live {
         tr.evals[o as usize].interval_batch(boxes, &mut f);
         for (c, fi) in clear.iter_mut().zip(&f) {
-            *c &= fi.is_empty() || fi.lo > 0.0;
+            *c &= proof::holds_no_surface(*fi);
         }
     }
     st.stats.interval_evals += (boxes.len() * live.len()) as u64;

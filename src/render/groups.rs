@@ -339,7 +339,7 @@ fn empty_tiles(evals: &[Arc<dyn Evaluator>], beams: &[TileBeam], st: &mut TileSt
             None => e.interval_batch(&boxes, &mut f),
         }
         for (c, v) in clear.iter_mut().zip(&f) {
-            *c &= v.is_empty() || v.lo > 0.0;
+            *c &= super::proof::holds_no_surface(*v);
         }
     }
     st.stats.interval_evals += (boxes.len() * evals.len()) as u64;

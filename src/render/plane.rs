@@ -193,7 +193,7 @@ fn level(
     for &k in live {
         tr.evals[k as usize].interval_batch(&boxes, &mut f);
         for (r, v) in f.iter().enumerate() {
-            if !(v.is_empty() || v.lo > 0.0) {
+            if !super::proof::holds_no_surface(*v) {
                 sub_live[r].push(k);
                 negative[r] |= v.hi < 0.0;
             }
@@ -297,7 +297,7 @@ fn small(
         for &k in live {
             tr.evals[k as usize].interval_batch(&boxes, &mut f);
             for (r, v) in f.iter().enumerate() {
-                if !(v.is_empty() || v.lo > 0.0) {
+                if !super::proof::holds_no_surface(*v) {
                     keep[r] = true;
                     neg[r] |= v.hi < 0.0;
                 }

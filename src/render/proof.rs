@@ -34,6 +34,13 @@ pub(crate) fn outside_at(f: Interval) -> bool {
     !f.is_empty() && f.lo > 0.0
 }
 
+/// Whether an enclosure is finite (not EMPTY, no infinite bound): the
+/// condition for a derivative enclosure to say anything of f's change
+/// along a piece (Newton steps, centred and mean-value forms).
+pub(crate) fn bounded(d: Interval) -> bool {
+    d.lo > f64::NEG_INFINITY && d.hi < f64::INFINITY
+}
+
 /// Whether a derivative enclosure proves f strictly increasing: a
 /// positive lower bound and a finite upper one.
 pub(crate) fn increasing(d: Interval) -> bool {

@@ -33,6 +33,7 @@
 
 use super::Hit;
 use super::camera::PixelRay;
+use super::proof;
 use super::refine::{refine, sign_change};
 use super::tracer::{TileState, Tracer};
 use crate::interval::Interval;
@@ -153,7 +154,7 @@ fn sweep_ray(
         cand.clear();
         for &k in live {
             let f = tr.interval(k as usize, bx, &mut st.stats);
-            if !f.is_empty() && f.lo <= 0.0 {
+            if !proof::holds_no_surface(f) {
                 cand.push(k);
             }
         }
@@ -267,7 +268,7 @@ fn centred(
         dfdt,
         fm: None,
     };
-    if dfdt.is_empty() || !dfdt.lo.is_finite() || !dfdt.hi.is_finite() {
+    if !proof::bounded(dfdt) {
         return c;
     }
     let m = 0.5 * (a + b);
@@ -351,7 +352,7 @@ fn newton(
     st: &mut RenderStats,
 ) -> Newton {
     let dfdt = c.dfdt;
-    if dfdt.is_empty() || !dfdt.lo.is_finite() || !dfdt.hi.is_finite() {
+    if !proof::bounded(dfdt) {
         return Newton::Shrunk(a, b);
     }
     let m = 0.5 * (a + b);

@@ -326,7 +326,7 @@ fn proven_empty(
     let hull = corners.hull(t);
     let empty = (0..tr.evals.len()).all(|k| {
         let v = tr.interval(k, hull, &mut st.stats);
-        v.is_empty() || v.lo > 0.0
+        super::proof::holds_no_surface(v)
     });
     st.stats.blocks_rejected += u64::from(empty);
     empty

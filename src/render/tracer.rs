@@ -417,11 +417,11 @@ impl<'a> Tracer<'a> {
         let e = self.answering(k, &b);
         st.stats.interval_evals += 2;
         let g = e.interval_grad(b);
-        if !g.d.iter().all(|d| d.lo.is_finite() && d.hi.is_finite()) {
+        if !g.d.iter().all(|&d| super::proof::bounded(d)) {
             return f;
         }
         let fc = e.interval(point_box(c));
-        if fc.is_empty() || !fc.lo.is_finite() || !fc.hi.is_finite() {
+        if !super::proof::bounded(fc) {
             return f;
         }
         let mut mv = fc;
