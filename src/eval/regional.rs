@@ -230,9 +230,11 @@ impl Evaluator for Regional {
 
     /// One batch on what answers for derivatives over the smallest region
     /// holding every point; point by point when the points leave the
-    /// region. The same bits either way: pruning keeps a decided
-    /// `min`/`max`'s winner, whose partials the node picks at every point
-    /// of the region.
+    /// region. Pruned by value, the same bits either way (pruning keeps a
+    /// decided `min`/`max`'s winner, whose partials the node picks at every
+    /// point of the region); pruned keeping signs, the region's tape may
+    /// drop an operand that is positive there yet the smaller one, so off
+    /// the surface the partials may differ from a point's own tape.
     fn point_grad_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [Grad]) {
         match point_hull(xs, ys, zs).filter(|h| box_within(h, &self.region)) {
             Some(hull) => self

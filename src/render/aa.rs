@@ -705,13 +705,13 @@ impl Ctx<'_, '_> {
         }
         let side = f64::from((b.x1 - b.x0).max(b.y1 - b.y0));
         let min_w = |t: f64| probe::min_width(tr, side, t);
-        // F over the part of the beam piece inside the bounds; None when
-        // the piece lies wholly outside them.
-        let eval_min = |t: Interval, st: &mut TileState| -> Option<Interval> {
+        // The signs of F over the part of the beam piece inside the bounds;
+        // None when the piece lies wholly outside them.
+        let eval_min = |t: Interval, st: &mut TileState| -> Option<proof::SignBound> {
             let hb = box_meet(corners.hull(t), bounds)?;
-            Some(probe::scene_interval(tr, &self.all, hb, Form::Tight(0), st))
+            Some(probe::scene_signs(tr, &self.all, hb, Form::Tight(0), st))
         };
-        let rejected = |t: Interval| eval_min(t, st).is_none_or(|f| f.lo > 0.0);
+        let rejected = |t: Interval| eval_min(t, st).is_none_or(|f| f.positive());
         let near = floor.near_from(t0);
         let (ta, tb) = match probe::sweep(tr.sweep_mode(t0, near, t1), t0, t1, min_w, rejected) {
             Sweep::Empty => return decide(Cell::Background, floor),
@@ -725,7 +725,7 @@ impl Ctx<'_, '_> {
         // strictly decreasing along every ray.
         let mut whole = |t: f64| {
             let hb = corners.hull(Interval::point(t));
-            probe::scene_interval(tr, &self.all, hb, Form::Natural, st)
+            probe::scene_signs(tr, &self.all, hb, Form::Natural, st)
         };
         let Some(tb2) = probe::bracket_end(
             (ta, tb),
@@ -817,10 +817,10 @@ impl Ctx<'_, '_> {
         for _ in 0..NARROW_STEPS {
             let m = 0.5 * (a + b);
             let hb = corners.hull(Interval::point(m));
-            let fm = probe::scene_interval(tr, &self.all, hb, Form::Natural, st);
-            if fm.lo > 0.0 {
+            let fm = probe::scene_signs(tr, &self.all, hb, Form::Natural, st);
+            if fm.positive() {
                 a = m;
-            } else if fm.hi < 0.0 {
+            } else if fm.negative() {
                 b = m;
             } else {
                 break;
@@ -828,9 +828,9 @@ impl Ctx<'_, '_> {
         }
         let mut skipped = || {
             let hb = box_meet(corners.hull(Interval::new(front, a)), *bounds)?;
-            Some(probe::scene_interval(tr, &self.all, hb, Form::Tight(0), st))
+            Some(probe::scene_signs(tr, &self.all, hb, Form::Tight(0), st))
         };
-        if a > front && skipped().is_some_and(|f| f.lo <= 0.0) {
+        if a > front && skipped().is_some_and(|f| !f.positive()) {
             a = front;
         }
         (a, b)

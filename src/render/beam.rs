@@ -242,11 +242,10 @@ fn beam_tests(
     let side = f64::from(side_px);
     let form = Form::Tight(side_px.ilog2() as usize);
     let min_w = |t: f64| probe::min_width(tr, side, t);
-    let eval_min = |t: Interval, st: &mut TileState| {
-        probe::scene_interval(tr, live, corners.hull(t), form, st)
-    };
+    let eval_min =
+        |t: Interval, st: &mut TileState| probe::scene_signs(tr, live, corners.hull(t), form, st);
     let (ta, tb) = match probe::sweep(tr.sweep_mode(t0, near, t1), t0, t1, min_w, |t| {
-        eval_min(t, st).lo > 0.0
+        eval_min(t, st).positive()
     }) {
         Sweep::Empty => {
             st.stats.blocks_rejected += 1;
@@ -563,7 +562,7 @@ fn start_hull(tr: &Tracer<'_>, tile: &mut TileRays, b: Rect, corners: &CornerRay
 
 // Every ray of the block has its first root in [ta, tb]: refine per pixel,
 // the pixels' searches together (`refine_batch`, the same bits as one by
-// one). A pixel whose refinement fails gets a full ray.
+// one on the same tape). A pixel whose refinement fails gets a full ray.
 fn include_block(
     tr: &Tracer<'_>,
     tile: &mut TileRays,

@@ -40,7 +40,7 @@ pub(crate) const GROUP_TILES: u32 = 4;
 const GROUP_SIDE: u32 = GROUP_TILES * TILE;
 
 /// One group's pruned evaluators (`None`: nothing prunes there), the
-/// region they are exact on, which of its tiles (row-major,
+/// region where they have the whole function's signs, which of its tiles (row-major,
 /// [`GROUP_TILES`] a row) they prove empty (see [`empty_tiles`]), and, in
 /// a flat scene, its other tiles' tapes (see [`TileTapes`]).
 type Group = Option<(PrunedEvals, IBox, Vec<bool>, Vec<Option<Arc<TileTapes>>>)>;
@@ -88,7 +88,7 @@ type RowTapes = Arc<Vec<Option<TileTapes>>>;
 
 impl TileGroups {
     /// The evaluators of the group holding the pixel `(x, y)` and the
-    /// region they are exact on, built now if no tile has asked yet;
+    /// region where they have the whole function's signs, built now if no tile has asked yet;
     /// `None` when nothing prunes there.
     pub(crate) fn of_pixel(
         &self,

@@ -56,6 +56,8 @@ pub mod ray;
 mod refine;
 pub mod shade;
 mod shadow;
+#[cfg(test)]
+mod signs_tests;
 mod slices;
 pub mod stats;
 mod subsample;
@@ -236,7 +238,8 @@ pub struct Hit {
     pub inside: bool,
     /// f's gradient at the hit, where the evaluator that refined the root
     /// took it: pruned around the root, it is the shortest tape at hand
-    /// (pruning is exact, so the bits are those of any other evaluator).
+    /// (pruning keeps signs: on the surface, the normal of any other
+    /// evaluator to rounding).
     /// None where shading takes it.
     pub grad: Option<[f64; 3]>,
     /// The front end of the root's last bracket: a point of the ray

@@ -4,6 +4,7 @@
 //! rejection sweep, the search for the far end of an inclusion bracket,
 //! and the quartering of a block.
 
+use super::proof::SignBound;
 use super::tracer::{TileState, Tracer};
 use crate::interval::Interval;
 use crate::interval::boxes::IBox;
@@ -97,24 +98,32 @@ pub(crate) enum Form {
     Tight(usize),
 }
 
-/// The scene function over the box `hb`: the minimum over the `live`
-/// objects, skipping those undefined on all of it (+inf when all are).
-pub(crate) fn scene_interval(
+/// The signs of the scene function over the box `hb`: the minimum over
+/// the `live` objects, skipping those undefined on all of it (positive
+/// when all are). Signs only: each object's tape is pruned keeping signs.
+pub(crate) fn scene_signs(
     tr: &Tracer<'_>,
     live: &[u32],
     hb: IBox,
     form: Form,
     st: &mut TileState,
-) -> Interval {
-    let mut f = Interval::point(f64::INFINITY);
+) -> SignBound {
+    let mut f = SignBound::NONE;
     for &k in live {
         let v = match form {
-            Form::Natural => tr.interval(k as usize, hb, &mut st.stats),
-            Form::Tight(level) => tr.interval_tight(k as usize, hb, level, st),
+            Form::Natural => {
+                let v = tr.interval(k as usize, hb, &mut st.stats);
+                if v.is_empty() {
+                    continue;
+                }
+                SignBound::of(v)
+            }
+            Form::Tight(level) => match tr.interval_tight(k as usize, hb, level, st) {
+                Some(v) => v,
+                None => continue,
+            },
         };
-        if !v.is_empty() {
-            f = f.min(v);
-        }
+        f = f.min(v);
     }
     f
 }
@@ -241,8 +250,8 @@ pub(crate) const DEEP_REACH: [f64; 2] = [8.0, 16.0];
 /// silhouette has rays in open space, where F is large and positive; a
 /// grazing beam whose rays have all entered the solid is negative but for
 /// the overestimate of the interval.
-fn leans_inside(c: Interval) -> bool {
-    c.lo < 0.0 && c.hi < -c.lo
+fn leans_inside(c: SignBound) -> bool {
+    c.leans_negative()
 }
 
 /// The far end of a bracket behind the candidate piece `[ta, tb]` (with
@@ -258,9 +267,9 @@ pub(crate) fn bracket_end(
     t1: f64,
     min_w: impl Fn(f64) -> f64,
     (reach, deeper): (&[f64], &[f64]),
-    mut cross: impl FnMut(f64) -> Interval,
+    mut cross: impl FnMut(f64) -> SignBound,
 ) -> Option<f64> {
-    if cross(ta).lo <= 0.0 {
+    if !cross(ta).positive() {
         return None;
     }
     let w = (tb - ta).max(min_w(ta));
@@ -274,7 +283,7 @@ pub(crate) fn bracket_end(
         }
         let tb2 = (ta + mult * w).min(t1);
         let c = cross(tb2);
-        if c.hi < 0.0 {
+        if c.negative() {
             return Some(tb2);
         }
         if tb2 >= t1 {
@@ -350,16 +359,21 @@ mod tests {
     // A cross-section model: positive before `enter`, straddling zero
     // (leaning inside by `lean`: lo = -1, hi = lean) until `inside`, then
     // negative. Counts the cross-sections asked for.
-    fn model(enter: f64, inside: f64, lean: f64, calls: &mut usize) -> impl FnMut(f64) -> Interval {
+    fn model(
+        enter: f64,
+        inside: f64,
+        lean: f64,
+        calls: &mut usize,
+    ) -> impl FnMut(f64) -> SignBound {
         move |t| {
             *calls += 1;
-            if t < enter {
+            SignBound::of(if t < enter {
                 Interval::new(1.0, 2.0)
             } else if t < inside {
                 Interval::new(-1.0, lean)
             } else {
                 Interval::new(-2.0, -1.0)
-            }
+            })
         }
     }
 

@@ -57,6 +57,62 @@ pub(crate) fn non_increasing(d: Interval) -> bool {
     d.hi <= 0.0 && d.lo > f64::NEG_INFINITY
 }
 
+/// What an enclosure built from several tapes proves: the signs of f
+/// over a box, and nothing of its values. Sign-pruned tapes
+/// (`eval::tape::Keep::Signs`) agree with the whole function on where it
+/// is negative, zero or positive, not on its value off the surface: the
+/// meet of two such tapes' intervals, or the minimum over objects of each
+/// one's own tape, bounds signs only, and this type keeps it at that.
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct SignBound {
+    lo: f64,
+    hi: f64,
+}
+
+impl SignBound {
+    /// No object over the box (every one undefined there): positive.
+    pub(crate) const NONE: SignBound = SignBound {
+        lo: f64::INFINITY,
+        hi: f64::INFINITY,
+    };
+
+    /// The signs an enclosure of f proves (EMPTY: none either way).
+    pub(crate) fn of(f: Interval) -> SignBound {
+        SignBound { lo: f.lo, hi: f.hi }
+    }
+
+    /// The signs of the smaller of two functions.
+    pub(crate) fn min(self, other: SignBound) -> SignBound {
+        SignBound {
+            lo: self.lo.min(other.lo),
+            hi: self.hi.min(other.hi),
+        }
+    }
+
+    /// The signs both bounds prove (a meet of two sound bounds).
+    pub(crate) fn meet(self, other: SignBound) -> SignBound {
+        let (lo, hi) = (self.lo.max(other.lo), self.hi.min(other.hi));
+        if lo <= hi { SignBound { lo, hi } } else { self }
+    }
+
+    /// f > 0 wherever it is defined on the box.
+    pub(crate) fn positive(self) -> bool {
+        self.lo > 0.0
+    }
+
+    /// f < 0 wherever it is defined on the box.
+    pub(crate) fn negative(self) -> bool {
+        self.hi < 0.0
+    }
+
+    /// Whether a bound that may hold both signs reaches further below zero
+    /// than above: a cost heuristic (how deep a bracket is looked for),
+    /// which may answer differently on different tapes; no proof reads it.
+    pub(crate) fn leans_negative(self) -> bool {
+        self.lo < 0.0 && self.hi < -self.lo
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

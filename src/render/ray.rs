@@ -206,7 +206,7 @@ fn sweep_ray(
             stack.push((na, m));
         };
         if let [(k, c)] = forms[..] {
-            match newton(tr, ray, k as usize, (a, b), c, stt) {
+            match newton(tr, ray, k as usize, (a, b), c.parts, stt) {
                 Newton::Empty => continue,
                 Newton::Unique(na, nb) => {
                     if let Some(h) = refine(tr, ray, live, na, nb, stt) {
@@ -243,10 +243,20 @@ fn sweep_ray(
 struct Centred {
     /// The form proves f > 0 on the piece.
     positive: bool,
-    /// dF/dt over the piece's box.
+    /// The form's parts, where dF/dt is bounded and F defined at the
+    /// midpoint (which interval Newton reads again).
+    parts: Option<CentredParts>,
+}
+
+/// dF/dt over a piece and F at its midpoint, from one evaluator (see
+/// `Tracer::answering`): with sign-pruned tapes (`eval::tape::Keep::Signs`)
+/// two tapes agree on signs only, and a formula that combines a value
+/// with a derivative must take both from the same one. Only `centred`
+/// builds it, so no caller can mix in another evaluation.
+#[derive(Copy, Clone)]
+struct CentredParts {
     dfdt: Interval,
-    /// F at the piece's midpoint, when it was evaluated (dF/dt finite).
-    fm: Option<Interval>,
+    fm: Interval,
 }
 
 // The centred form of object k over the piece [a, b] whose box is `bx`.
@@ -265,8 +275,7 @@ fn centred(
     let [_, dfdt] = e.interval_dir(bx, ray.d);
     let mut c = Centred {
         positive: false,
-        dfdt,
-        fm: None,
+        parts: None,
     };
     if !proof::bounded(dfdt) {
         return c;
@@ -274,12 +283,12 @@ fn centred(
     let m = 0.5 * (a + b);
     st.interval_evals += 1;
     let fm = e.interval(ray_box(ray.o, ray.d, Interval::point(m)));
-    c.fm = Some(fm);
     if fm.is_empty() {
         return c;
     }
     let off = Interval::new(a, b).sub(Interval::point(m));
     c.positive = fm.add(dfdt.mul(off)).lo > 0.0;
+    c.parts = Some(CentredParts { dfdt, fm });
     c
 }
 
@@ -342,25 +351,22 @@ enum Newton {
 }
 
 // One interval Newton step for object k on [a, b], from the centred
-// form's dF/dt over the piece and F at its midpoint (`c`).
+// form's dF/dt over the piece and F at its midpoint (`c`, None where the
+// form had no bounded parts: the piece is only halved then). The points
+// `na` and `nb` are evaluated for their signs alone, which every tape
+// gives alike.
 fn newton(
     tr: &Tracer<'_>,
     ray: &PixelRay,
     k: usize,
     (a, b): (f64, f64),
-    c: Centred,
+    c: Option<CentredParts>,
     st: &mut RenderStats,
 ) -> Newton {
-    let dfdt = c.dfdt;
-    if !proof::bounded(dfdt) {
+    let Some(CentredParts { dfdt, fm }) = c else {
         return Newton::Shrunk(a, b);
-    }
+    };
     let m = 0.5 * (a + b);
-    let fm =
-        c.fm.unwrap_or_else(|| tr.interval(k, ray_box(ray.o, ray.d, Interval::point(m)), st));
-    if fm.is_empty() {
-        return Newton::Shrunk(a, b);
-    }
     if dfdt.contains(0.0) {
         return newton_gap((a, b), m, fm, dfdt);
     }

@@ -2,8 +2,11 @@
 //! false position ([`illinois`]), for one ray ([`refine`]) or for the
 //! pixels of an included block together ([`refine_batch`]), whose searches
 //! run in lockstep and evaluate each step's points in one batch per object
-//! over the block's tape. Both give the same bits: each search sees the
-//! same values in the same order.
+//! over the block's tape. On the same tape both give the same bits (each
+//! search sees the same values in the same order); the renderer's tapes
+//! are pruned keeping signs (`eval::tape::Keep::Signs`), so a block's tape
+//! and a pixel's own agree on signs, not values, and their roots agree
+//! within the root tolerance (`signs_tests`).
 
 use super::Hit;
 use super::camera::PixelRay;
@@ -380,8 +383,10 @@ pub(crate) fn refine_batch(
     out
 }
 
-/// `ray::scene_point` at each of `points`, one batch per live object (the
-/// same bits).
+/// `ray::scene_point` at each of `points`, one batch per live object: the
+/// same signs (the batch runs the tape of the region holding them all,
+/// which a point alone may not), so the same points inside a solid; off
+/// the surface the values, and the object found smallest, may differ.
 pub(crate) fn scene_points(
     tr: &Tracer<'_>,
     live: &[u32],

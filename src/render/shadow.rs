@@ -284,9 +284,12 @@ impl Segments<'_> {
     // `scope` wide (infinite: the whole functions); whether every piece is
     // free. A piece `SEGMENT_CELL_RATIO` times narrower than `scope` is
     // swept, with its sub-pieces, by a nested call on the evaluators of
-    // the smallest cell holding it. Pruning is exact, so the nesting changes the cost
-    // of the evaluations and the tightness of their intervals, not the
-    // order in which pieces are visited.
+    // the smallest cell holding it. Pruning keeps signs, and a piece's
+    // proofs read signs only (a pruned function positive at a start and
+    // increasing has the whole function's sign, positive, on the piece),
+    // so the nesting changes the cost of the evaluations and the
+    // tightness of their intervals, not the order in which pieces are
+    // visited.
     // One front-to-back loop: every branch reads or sets `front`, which
     // holds only because pieces are popped in order, so the loop stays whole.
     fn free(

@@ -192,7 +192,9 @@ pub(crate) fn render_tile(
     st.stats.trace_cpu_ms += ms_since(t_trace);
 
     // Hit points lie in the tile's beam: their normals may come from the
-    // pruned functions too (the same bits).
+    // pruned functions too: on the surface the pruned tapes keep the
+    // branch the whole function's `min`/`max` takes, and the normals agree
+    // to rounding (`render::signs_tests`).
     let t_shade = Instant::now();
     let cut = CutFaces::of(tr, &tile);
     let mut surfs = TileSurfs::new(n, tile.hits.iter().flatten().count());

@@ -10,6 +10,7 @@ use glam::DVec3;
 use super::camera::{CornerRays, RayCamera};
 use super::cells::CellTapes;
 use super::groups::TileGroups;
+use super::proof::SignBound;
 use super::stats::RenderStats;
 use crate::eval::regional::Regional;
 use crate::eval::tape::{Tape, Workspace};
@@ -382,23 +383,30 @@ impl<'a> Tracer<'a> {
         self.evals[k].interval(b)
     }
 
-    /// F over `b`, tightened where it straddles 0 by the mean-value form
-    /// `f(c) + ∇F(b)·(b − c)` (c the box centre), intersected with the
-    /// natural enclosure. Sound wherever the evaluator's gradient
-    /// enclosure covers the (generalised) gradient of f over the box; it is
-    /// used only when every gradient bound is finite, which rules out the
-    /// poles and domain edges where it would not. `level` is the block's
-    /// size class for the [`MeanValuePolicy`].
+    /// The signs of F over `b` (None: F undefined on all of it), tightened
+    /// where the natural enclosure straddles 0 by the mean-value form
+    /// `f(c) + ∇F(b)·(b − c)` (c the box centre), met with it. Sound
+    /// wherever the evaluator's gradient enclosure covers the
+    /// (generalised) gradient of f over the box; it is used only when
+    /// every gradient bound is finite, which rules out the poles and
+    /// domain edges where it would not. `level` is the block's size class
+    /// for the [`MeanValuePolicy`]. Signs only: the natural enclosure may
+    /// come from another region's tape than the form (see
+    /// [`SignBound`]).
     pub(crate) fn interval_tight(
         &self,
         k: usize,
         b: IBox,
         level: usize,
         st: &mut TileState,
-    ) -> Interval {
+    ) -> Option<SignBound> {
         let f = self.interval(k, b, &mut st.stats);
-        if f.is_empty() || f.lo > 0.0 || f.hi < 0.0 {
-            return f;
+        if f.is_empty() {
+            return None;
+        }
+        let natural = SignBound::of(f);
+        if f.lo > 0.0 || f.hi < 0.0 {
+            return Some(natural);
         }
         // Flat scenes (2D models seen along their missing axis) skip the
         // form outright: their functions are min/max trees of thousands of
@@ -406,10 +414,10 @@ impl<'a> Tracer<'a> {
         // while compiling and running the interval-gradient evaluator
         // doubled the render time.
         if self.flat || !st.mean_value.pays(level) {
-            return f;
+            return Some(natural);
         }
         if !b.iter().all(|c| c.lo.is_finite() && c.hi.is_finite()) {
-            return f;
+            return Some(natural);
         }
         let c: [f64; 3] = b.map(|i| i.mid());
         // The centre's value and the gradient from one function (see
@@ -418,11 +426,11 @@ impl<'a> Tracer<'a> {
         st.stats.interval_evals += 2;
         let g = e.interval_grad(b);
         if !g.d.iter().all(|&d| super::proof::bounded(d)) {
-            return f;
+            return Some(natural);
         }
         let fc = e.interval(point_box(c));
         if !super::proof::bounded(fc) {
-            return f;
+            return Some(natural);
         }
         let mut mv = fc;
         for i in 0..3 {
@@ -431,12 +439,12 @@ impl<'a> Tracer<'a> {
         // `f` may come from another region's tape than `mv` (one that
         // keeps signs only); the meet still proves a sign only where one of
         // the two does, and every tape of the tree has the same signs.
-        let (lo, hi) = (f.lo.max(mv.lo), f.hi.min(mv.hi));
-        let win = lo > 0.0 || hi < 0.0;
+        let tight = natural.meet(SignBound::of(mv));
+        let win = tight.positive() || tight.negative();
         st.stats.mean_value_tries += 1;
         st.stats.mean_value_wins += u64::from(win);
         st.mean_value.record(level, win);
-        if lo <= hi { Interval::new(lo, hi) } else { f }
+        Some(tight)
     }
 
     /// What evaluates object `k` over `b` and at the points of `b` with
@@ -479,7 +487,9 @@ impl<'a> Tracer<'a> {
     }
 
     /// [`Tracer::point_grad`] of object `k` at each of `points`, in one
-    /// batch (the same bits), into `out` (as long as `points`); `cols`
+    /// batch (on the tape of the region holding them all: the same signs
+    /// as one by one, and on the surface the same normals to rounding),
+    /// into `out` (as long as `points`); `cols`
     /// holds the coordinate columns.
     pub(crate) fn point_grads(
         &self,
