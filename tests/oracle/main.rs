@@ -13,6 +13,7 @@
 
 mod certify;
 mod edges;
+mod exact;
 mod scenes;
 
 use std::sync::Arc;
