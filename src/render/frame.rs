@@ -3,7 +3,7 @@
 //! counters merged in tile order into the images.
 
 use std::sync::Arc;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -75,6 +75,7 @@ pub struct Frame<'a> {
     compiled_before: f64,
     float: FloatLayers,
     progress: Option<Progress>,
+    cancel: Option<Arc<AtomicBool>>,
 }
 
 /// A caller's progress report: called with (tiles done, tiles in all)
@@ -141,6 +142,7 @@ impl<'a> Frame<'a> {
             compiled_before,
             float: FloatLayers::default(),
             progress: None,
+            cancel: None,
         })
     }
 
@@ -156,6 +158,14 @@ impl<'a> Frame<'a> {
     /// progress bar with it).
     pub fn with_progress(mut self, report: Progress) -> Frame<'a> {
         self.progress = Some(report);
+        self
+    }
+
+    /// Makes [`Frame::stream`] stop before its next row of tiles once
+    /// `cancel` is set, with [`RenderError::Cancelled`]: a live view drops
+    /// a stale render within a row's time instead of finishing it.
+    pub fn with_cancel(mut self, cancel: Arc<AtomicBool>) -> Frame<'a> {
+        self.cancel = Some(cancel);
         self
     }
 
@@ -204,8 +214,9 @@ impl<'a> Frame<'a> {
     /// runs on a worker of the render's pool while the next row is traced.
     /// Returns the counters (the same as [`Frame::render`]'s); its
     /// `output_ms` includes the time spent in `sink`. Stops at the first
-    /// error of `sink`.
-    pub fn stream<E: Send>(
+    /// error of `sink`, or once the cancel flag is set
+    /// ([`Frame::with_cancel`]).
+    pub fn stream<E: Send + From<RenderError>>(
         self,
         mut sink: impl FnMut(&Band) -> Result<(), E> + Send,
     ) -> Result<RenderStats, E> {
@@ -233,6 +244,9 @@ impl<'a> Frame<'a> {
         let mut above: Vec<TileEdges> = Vec::new();
         let mut current = look_ahead.then(|| self.pool.install(|| self.trace(&tile_row(w, h, 0))));
         for (r, &y0) in rows.iter().enumerate() {
+            if self.cancelled() {
+                return Err(RenderError::Cancelled.into());
+            }
             // Encoding the last band overlaps tracing this row: the sink
             // is serial (one file, top to bottom), the tracing is not.
             let (traced, written) = self.pool.install(|| {
@@ -291,6 +305,12 @@ impl<'a> Frame<'a> {
         stats.output_ms = output_ms;
         self.finish_times(&mut stats);
         Ok(stats)
+    }
+
+    fn cancelled(&self) -> bool {
+        self.cancel
+            .as_ref()
+            .is_some_and(|c| c.load(Ordering::Relaxed))
     }
 
     // Drops the tracers' groups of tiles above output row `y` (see

@@ -195,6 +195,8 @@ pub enum RenderError {
     BadAa(AaError),
     /// An object's function is undefined at every point of the bounds.
     Undefined(String),
+    /// The caller's cancel flag was set (see [`Frame::with_cancel`]).
+    Cancelled,
 }
 
 impl std::fmt::Display for RenderError {
@@ -221,6 +223,7 @@ impl std::fmt::Display for RenderError {
                  (e.g. a division by zero or the square root of a negative \
                  number), so it has no surface to draw"
             ),
+            RenderError::Cancelled => write!(f, "the render was cancelled"),
         }
     }
 }

@@ -3,10 +3,12 @@
 //! anti-aliasing, on example scenes.
 
 use std::path::Path;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use ibeam::eval::{EvalKind, build_evaluators};
 use ibeam::render::output::depth_range;
-use ibeam::render::{Aa, Band, Frame, RenderOptions, RenderStats, render_aa};
+use ibeam::render::{Aa, Band, Frame, RenderError, RenderOptions, RenderStats, render_aa};
 
 /// The render counters, times (which vary run to run) zeroed.
 fn counters(s: &RenderStats) -> RenderStats {
@@ -63,7 +65,7 @@ fn streamed_bands_are_the_in_memory_images() {
                 let stats = frame
                     .stream(|b| {
                         bands.push(b.clone());
-                        Ok::<(), ()>(())
+                        Ok::<(), RenderError>(())
                     })
                     .unwrap();
                 let what = format!("{name} {aa:?} threads {threads}");
@@ -98,17 +100,97 @@ fn streamed_bands_are_the_in_memory_images() {
     }
 }
 
+/// A sink's own error, or the render's (a cancelled stream's).
+#[derive(Debug, PartialEq)]
+enum SinkError {
+    DiskFull,
+    Render(RenderError),
+}
+
+impl From<RenderError> for SinkError {
+    fn from(e: RenderError) -> SinkError {
+        SinkError::Render(e)
+    }
+}
+
+fn sphere() -> ibeam::scene::Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/sphere.ib");
+    ibeam::lang::load_scene(&path).unwrap()
+}
+
 #[test]
 fn a_failing_sink_stops_the_stream() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/sphere.ib");
-    let scene = ibeam::lang::load_scene(&path).unwrap();
+    let scene = sphere();
     let ev = build_evaluators(&scene, EvalKind::Interp).unwrap();
     let frame = Frame::new(&scene, &ev, &RenderOptions::new(40, 100), Aa::None).unwrap();
     let mut calls = 0;
     let r = frame.stream(|_| {
         calls += 1;
-        if calls == 2 { Err("disk full") } else { Ok(()) }
+        if calls == 2 {
+            Err(SinkError::DiskFull)
+        } else {
+            Ok(())
+        }
     });
-    assert_eq!(r, Err("disk full"));
+    assert_eq!(r, Err(SinkError::DiskFull));
     assert_eq!(calls, 2);
+}
+
+#[test]
+fn a_cancelled_stream_stops_before_its_next_row() {
+    let scene = sphere();
+    let ev = build_evaluators(&scene, EvalKind::Interp).unwrap();
+    // Four rows of tiles; the first band is handed out while the second
+    // row is traced, so the flag set there stops the stream at the third.
+    let opts = RenderOptions::new(40, 100);
+    let cancel = Arc::new(AtomicBool::new(false));
+    let frame = Frame::new(&scene, &ev, &opts, Aa::None)
+        .unwrap()
+        .with_cancel(Arc::clone(&cancel));
+    let mut calls = 0;
+    let r = frame.stream(|_| {
+        calls += 1;
+        cancel.store(true, Ordering::Relaxed);
+        Ok::<(), SinkError>(())
+    });
+    assert_eq!(r, Err(SinkError::Render(RenderError::Cancelled)));
+    assert_eq!(calls, 1);
+    // Set before the start, nothing is traced or handed out.
+    let frame = Frame::new(&scene, &ev, &opts, Aa::None)
+        .unwrap()
+        .with_cancel(Arc::new(AtomicBool::new(true)));
+    let r = frame.stream(|_| -> Result<(), RenderError> { panic!("a band after cancel") });
+    assert_eq!(r, Err(RenderError::Cancelled));
+    // An unset flag changes nothing.
+    let frame = Frame::new(&scene, &ev, &opts, Aa::None)
+        .unwrap()
+        .with_cancel(Arc::new(AtomicBool::new(false)));
+    let mut rows = 0;
+    frame
+        .stream(|b| {
+            rows += b.rows;
+            Ok::<(), RenderError>(())
+        })
+        .unwrap();
+    assert_eq!(rows, 100);
+}
+
+/// What `ibeam serve` relies on: one scene's evaluators (compiled once)
+/// render any number of views, each the image fresh evaluators give.
+#[test]
+fn evaluators_are_shared_across_views() {
+    let mut scene = sphere();
+    let shared = build_evaluators(&scene, EvalKind::Jit).unwrap();
+    let opts = RenderOptions::new(48, 40);
+    let mut images = Vec::new();
+    for eye in [[0.0, 0.5, 4.0], [3.0, 1.0, -2.0], [0.0, 0.5, 4.0]] {
+        scene.camera.eye = eye;
+        let fresh = build_evaluators(&scene, EvalKind::Jit).unwrap();
+        let a = render_aa(&scene, &shared, &opts, Aa::None).unwrap();
+        let b = render_aa(&scene, &fresh, &opts, Aa::None).unwrap();
+        assert_eq!(a.image, b.image, "eye {eye:?}");
+        images.push(a.image);
+    }
+    assert_ne!(images[0], images[1], "the views differ");
+    assert_eq!(images[0], images[2], "the same view again, the same pixels");
 }
