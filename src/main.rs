@@ -24,6 +24,8 @@ enum Command {
     Render(cli::render::Args),
     /// Render a scene, then again (preview first) each time it or an import is saved.
     Watch(cli::watch::Args),
+    /// Serve a live view of a scene in the browser: turn it, and see each save.
+    Serve(cli::serve::Args),
     /// Run a benchmark and print its table (baseline in the same run).
     Bench(cli::bench::Args),
     /// Write a scene's objects in another format (`--vm`: Fidget's text).
@@ -44,6 +46,7 @@ fn main() -> ExitCode {
             Command::Eval(a) => cli::eval::run(a),
             Command::Render(a) => cli::render::run(a),
             Command::Watch(a) => cli::watch::run(a),
+            Command::Serve(a) => cli::serve::run(a),
             Command::Bench(a) => cli::bench::run(a),
             Command::Export(a) => cli::export::run(a),
         });

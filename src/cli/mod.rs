@@ -11,6 +11,7 @@ pub mod ir;
 pub mod png_stream;
 pub mod progress;
 pub mod render;
+pub mod serve;
 pub mod view;
 pub mod watch;
 

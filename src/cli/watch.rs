@@ -116,7 +116,11 @@ pub fn run(args: &Args) -> Result<(), CliError> {
 /// Watches the folder of each file (and stops watching folders no file is
 /// in any more). A folder that cannot be watched (a missing import's
 /// missing folder) is left out: the load reports the real problem.
-fn watch_folders(watcher: &mut impl Watcher, dirs: &mut BTreeSet<PathBuf>, files: &[PathBuf]) {
+pub(super) fn watch_folders(
+    watcher: &mut impl Watcher,
+    dirs: &mut BTreeSet<PathBuf>,
+    files: &[PathBuf],
+) {
     let wanted: BTreeSet<PathBuf> = files
         .iter()
         .filter_map(|f| f.parent().map(Path::to_path_buf))
@@ -134,7 +138,7 @@ fn watch_folders(watcher: &mut impl Watcher, dirs: &mut BTreeSet<PathBuf>, files
 
 /// Blocks until an event touches one of `files`, then until events have
 /// stopped for [`QUIET`].
-fn wait_for_change(
+pub(super) fn wait_for_change(
     rx: &Receiver<notify::Result<notify::Event>>,
     files: &[PathBuf],
 ) -> Result<(), CliError> {
