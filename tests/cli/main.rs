@@ -1,7 +1,7 @@
 //! End-to-end tests of the `ibeam` binary: `ibeam render` on the examples
 //! writes PNGs, and every load or argument error exits with a message on
 //! stderr and a non-zero code, never a panic (exit code 101); `ibeam ir`
-//! and `ibeam eval` in [`ir`]; output formats in [`formats`]; camera,
+//! and `ibeam eval` in [`ir`]; `ibeam serve` over HTTP in [`serve`]; output formats in [`formats`]; camera,
 //! shadow and progress flags in [`view`]. One test binary.
 
 #[path = "../common/mod.rs"]
@@ -9,6 +9,7 @@ mod common;
 mod export;
 mod formats;
 mod ir;
+mod serve;
 mod view;
 mod watch;
 
