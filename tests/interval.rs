@@ -1,12 +1,15 @@
-//! Interval arithmetic against inari (tightest outward rounding) and
+//! Interval arithmetic against the tightest outward-rounded results of
+//! tests/common/tight.rs (`+ - * /`, sqrt, square, and the exact ops) and
 //! against sampled point values.
 //!
-//! inari is built without its `gmp` feature, which is where its
-//! transcendentals live, so exp, ln, sin, cos, atan2 and pow are checked by
-//! containment of sampled point values (including points placed on their
-//! extrema, at huge arguments and on the atan2 branch cut) and by a width
-//! bound on degenerate intervals.
+//! The oracle has no transcendentals, so exp, ln, sin, cos, atan2 and pow
+//! are checked by containment of sampled point values (including points
+//! placed on their extrema, at huge arguments and on the atan2 branch cut)
+//! and by a width bound on degenerate intervals.
 
+mod common;
+
+use common::tight::{self, Tight};
 use ibeam::eval::Evaluator;
 use ibeam::eval::interp::Interpreter;
 use ibeam::interval::{Interval, TRANSCENDENTAL_ULPS};
@@ -29,7 +32,8 @@ fn bound() -> impl Strategy<Value = f64> {
     ]
 }
 
-/// Intervals with lo <= hi, lo < +inf, hi > -inf (inari's valid intervals).
+/// Intervals with lo <= hi, lo < +inf, hi > -inf (IEEE 1788's valid
+/// intervals, which the oracle takes).
 fn interval() -> impl Strategy<Value = Interval> {
     (bound(), bound()).prop_map(|(a, b)| {
         let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
@@ -43,79 +47,16 @@ fn interval() -> impl Strategy<Value = Interval> {
     })
 }
 
-/// The inari oracle. inari needs AVX and FMA on x86-64 at compile time, so
-/// it is a dev-dependency only where the target has them (`.ci/run`
-/// builds with `-C target-cpu=haswell`); a baseline build leaves it out.
-#[cfg(any(
-    target_arch = "aarch64",
-    all(target_arch = "x86_64", target_feature = "avx", target_feature = "fma")
-))]
-mod oracle {
-    use super::*;
+/// `(lo, hi)`, the oracle's form of an interval.
+fn pair(i: Interval) -> (f64, f64) {
+    (i.lo, i.hi)
+}
 
-    fn to_inari(i: Interval) -> inari::Interval {
-        inari::Interval::try_from((i.lo, i.hi)).expect("valid interval")
-    }
-
-    fn from_inari(i: inari::Interval) -> Interval {
-        Interval::new(i.inf(), i.sup())
-    }
-
-    // Two ulps out, or 2^-510 near zero (see `interval::up`).
-    fn down2(v: f64) -> f64 {
-        let near_zero = (v - 2f64.powi(-510)).next_down();
-        v.next_down().next_down().min(near_zero)
-    }
-
-    fn up2(v: f64) -> f64 {
-        let near_zero = (v + 2f64.powi(-510)).next_up();
-        v.next_up().next_up().max(near_zero)
-    }
-
-    /// Ours contains inari's tightest result and is at most 2 ulps wider on
-    /// each side (2^-510 near zero).
-    fn assert_tight(ours: Interval, theirs: inari::Interval, what: &str) {
-        if theirs.is_empty() {
-            assert!(ours.is_empty(), "{what}: {ours:?}, inari EMPTY");
-            return;
-        }
-        let (lo, hi) = (theirs.inf(), theirs.sup());
-        assert!(
-            ours.lo <= lo && hi <= ours.hi,
-            "{what}: {ours:?} does not contain inari's [{lo:e}, {hi:e}]"
-        );
-        assert!(
-            ours.lo >= down2(lo) && ours.hi <= up2(hi),
-            "{what}: {ours:?} much wider than inari's [{lo:e}, {hi:e}]"
-        );
-    }
-
-    proptest! {
-        #![proptest_config(ProptestConfig {
-            cases: 2000,
-            failure_persistence: None,
-            ..ProptestConfig::default()
-        })]
-
-        #[test]
-        fn arithmetic_matches_inari(a in interval(), b in interval()) {
-            let (ia, ib) = (to_inari(a), to_inari(b));
-            assert_tight(a.add(b), ia + ib, &format!("{a:?} + {b:?}"));
-            assert_tight(a.sub(b), ia - ib, &format!("{a:?} - {b:?}"));
-            assert_tight(a.mul(b), ia * ib, &format!("{a:?} * {b:?}"));
-            assert_tight(a.div(b), ia / ib, &format!("{a:?} / {b:?}"));
-            assert_tight(a.min(b), ia.min(ib), &format!("min {a:?} {b:?}"));
-            assert_tight(a.max(b), ia.max(ib), &format!("max {a:?} {b:?}"));
-            assert_tight(a.sqrt(), ia.sqrt(), &format!("sqrt {a:?}"));
-            assert_tight(a.square(), ia.sqr(), &format!("square {a:?}"));
-            assert_tight(a.abs(), ia.abs(), &format!("abs {a:?}"));
-            assert_tight(a.neg(), -ia, &format!("neg {a:?}"));
-            // The steps are exact: equal to inari's tightest result.
-            assert_eq!(a.floor(), from_inari(ia.floor()), "floor {a:?}");
-            assert_eq!(a.ceil(), from_inari(ia.ceil()), "ceil {a:?}");
-            assert_eq!(a.round(), from_inari(ia.round()), "round {a:?}");
-            assert_eq!(a.sign(), from_inari(ia.sign()), "sign {a:?}");
-        }
+/// Ours contains the tightest result and is at most 2 ulps wider on each
+/// side (2^-510 near zero); see `tight::tight_enough`.
+fn assert_tight(ours: Interval, tightest: Tight, what: &str) {
+    if let Err(e) = tight::tight_enough(pair(ours), tightest) {
+        panic!("{what}: {e}");
     }
 }
 
@@ -125,6 +66,30 @@ proptest! {
         failure_persistence: None,
         ..ProptestConfig::default()
     })]
+
+    #[test]
+    fn arithmetic_is_tight(a in interval(), b in interval()) {
+        let (pa, pb) = (pair(a), pair(b));
+        assert_tight(a.add(b), tight::add(pa, pb), &format!("{a:?} + {b:?}"));
+        assert_tight(a.sub(b), tight::sub(pa, pb), &format!("{a:?} - {b:?}"));
+        assert_tight(a.mul(b), tight::mul(pa, pb), &format!("{a:?} * {b:?}"));
+        assert_tight(a.div(b), tight::div(pa, pb), &format!("{a:?} / {b:?}"));
+        assert_tight(a.min(b), Some(tight::min(pa, pb)), &format!("min {a:?} {b:?}"));
+        assert_tight(a.max(b), Some(tight::max(pa, pb)), &format!("max {a:?} {b:?}"));
+        assert_tight(a.sqrt(), tight::sqrt(pa), &format!("sqrt {a:?}"));
+        assert_tight(a.square(), tight::square(pa), &format!("square {a:?}"));
+        assert_tight(a.abs(), Some(tight::abs(pa)), &format!("abs {a:?}"));
+        assert_tight(a.neg(), Some(tight::neg(pa)), &format!("neg {a:?}"));
+        // The steps are exact: equal to the tightest result.
+        let exact = |f: fn(f64) -> f64| {
+            let (lo, hi) = tight::steps(pa, f);
+            Interval::new(lo, hi)
+        };
+        assert_eq!(a.floor(), exact(f64::floor), "floor {a:?}");
+        assert_eq!(a.ceil(), exact(f64::ceil), "ceil {a:?}");
+        assert_eq!(a.round(), exact(f64::round), "round {a:?}");
+        assert_eq!(a.sign(), exact(tight::sign), "sign {a:?}");
+    }
 
     #[test]
     fn every_op_contains_sampled_points(

@@ -1,7 +1,8 @@
 //! Shared test helpers: the evaluator conformance suite ([`suite`]) that
 //! every implementation of `Evaluator` runs (the interpreter, the JIT, the
-//! regional evaluator), generators of edge values, boxes and points, and
-//! the runner of the `ibeam` binary.
+//! regional evaluator), the tightest-interval oracle ([`tight`]),
+//! generators of edge values, boxes and points, and the runner of the
+//! `ibeam` binary.
 //!
 //! Use it from a test file with `mod common;` (from a directory module,
 //! `#[path = "../common/mod.rs"] mod common;`).
@@ -9,6 +10,7 @@
 
 #[macro_use]
 pub mod suite;
+pub mod tight;
 
 use std::process::{Command, Output};
 
