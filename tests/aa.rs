@@ -4,7 +4,9 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use ibeam::bench::accuracy::{CSV_HEADER, Family, default_variants, run_accuracy, sweep_scene};
+use ibeam::bench::accuracy::{
+    CSV_HEADER, Family, REFERENCE, compare, default_variants, run_accuracy, sweep_scene,
+};
 use ibeam::eval::Evaluator;
 use ibeam::eval::interp::Interpreter;
 use ibeam::ir::passes::simplify;
@@ -229,13 +231,37 @@ fn accuracy_sweep_writes_its_files_and_obeys_the_obvious_relations() {
     assert_eq!(reference.coverage_diff_pct, 0.0);
     assert_eq!(reference.missed_surface, 0);
     assert_eq!(reference.samples_mean, 256.0);
-    for r in &rows[1..] {
-        assert!(r.rmse.is_finite() && r.rmse >= 0.0 && r.rmse <= r.max_abs + 1e-12);
+    // Each row's errors are those of its variant's render against the
+    // reference's, recomputed here from the two images.
+    let (scene, evals) = load("sphere");
+    let draw = |method: Method, aa: Aa| {
+        let mut o = RenderOptions::new(12, 12);
+        o.method = method;
+        render_aa(&scene, &evals, &o, aa).unwrap()
+    };
+    let reference_image = draw(REFERENCE.0, REFERENCE.1);
+    for (r, v) in rows[1..].iter().zip(default_variants()) {
+        assert_eq!((r.family, &r.param), (v.family, &v.param));
+        let (rmse, max_abs) = colour_errors(&reference_image, &draw(v.method, v.aa));
+        assert!(
+            (r.rmse - rmse).abs() <= 1e-12 * rmse && r.max_abs == max_abs,
+            "{} {}: rmse {} and max {} reported, {rmse} and {max_abs} recomputed",
+            r.family,
+            r.param,
+            r.rmse,
+            r.max_abs
+        );
         assert!(r.time_ms > 0.0);
         if r.family != Family::Point {
             assert_eq!(r.missed_surface, 0, "{} {}", r.family, r.param);
         }
     }
+    // Not vacuous: point sampling at 16 steps differs from the reference.
+    assert!(
+        rows[1].rmse > 1e-3 && rows[1].max_abs > 0.1,
+        "{:?}",
+        rows[1]
+    );
     assert!(rows[1..].iter().any(|r| r.pareto));
     // The beam and pixel methods draw the same pixels (their colours
     // differ within the depth tolerance).
@@ -245,6 +271,56 @@ fn accuracy_sweep_writes_its_files_and_obeys_the_obvious_relations() {
         fam(Family::Pixel).coverage_diff_pct
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// RMSE and largest error of linear colour, channels clamped to [0, 1],
+/// over every pixel and channel (what the accuracy rows report).
+fn colour_errors(reference: &RenderOutput, out: &RenderOutput) -> (f64, f64) {
+    assert_eq!(reference.linear.len(), out.linear.len());
+    let errors: Vec<f64> = reference
+        .linear
+        .iter()
+        .zip(&out.linear)
+        .flat_map(|(a, b)| {
+            (0..3).map(move |c| {
+                (f64::from(a[c]).clamp(0.0, 1.0) - f64::from(b[c]).clamp(0.0, 1.0)).abs()
+            })
+        })
+        .collect();
+    let mean_square = errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64;
+    (
+        mean_square.sqrt(),
+        errors.iter().copied().fold(0.0, f64::max),
+    )
+}
+
+/// `compare` on a render against a copy with known damage: one channel of
+/// one pixel off by 1/4, one covered pixel emptied.
+#[test]
+fn compare_reports_known_errors() {
+    let (scene, evals) = load("sphere");
+    let reference = go(&scene, &evals, 12, Aa::None, 1);
+    let n = reference.linear.len();
+    assert_eq!(
+        compare(&reference, &reference.hit_mask, &reference.clone()).rmse,
+        0.0
+    );
+    let mut damaged = reference.clone();
+    let c = damaged.linear[3][1];
+    damaged.linear[3][1] = if c <= 0.5 { c + 0.25 } else { c - 0.25 };
+    let hit = reference.hit_mask.iter().position(|&h| h).expect("a hit");
+    assert_ne!(hit, 3, "the sphere covers pixel 3");
+    damaged.coverage[hit] = 0.0;
+    let e = compare(&reference, &reference.hit_mask, &damaged);
+    let want = (0.0625 / (3.0 * n as f64)).sqrt();
+    assert!(
+        (e.rmse - want).abs() < 1e-6 * want,
+        "rmse {} want {want}",
+        e.rmse
+    );
+    assert!((e.max_abs - 0.25).abs() < 1e-6, "max {:e}", e.max_abs);
+    assert_eq!(e.missed_surface, 1);
+    assert_eq!(e.coverage_diff_pct, 100.0 / n as f64);
 }
 
 #[test]
