@@ -1,7 +1,9 @@
 //! The evaluator conformance suite (tests/common/suite.rs) run on every
 //! evaluator: the reference interpreter, a tape run over its registers
 //! (`eval::taped`), the JIT, and the regional evaluator (a function pruned to a region, the whole function
-//! interpreted outside it).
+//! interpreted outside it). The interpreter, whose rules are the suite's
+//! references, is also checked against references independent of them
+//! (tests/common/independent.rs).
 
 #[macro_use]
 mod common;
@@ -21,11 +23,37 @@ use common::{EDGE_VALUES, random_box};
 
 mod interp {
     use super::*;
+    use common::independent;
 
     conformance_suite!(
         |f: &Function| -> Arc<dyn Evaluator> { Arc::new(Interpreter::new(f.clone())) },
         exact_intervals: true
     );
+
+    // The suite's references are `ir::semantics`, the very rules the
+    // interpreter runs, so for it those comparisons are identities; these
+    // compare it with references written out in the tests instead
+    // (tests/common/independent.rs).
+
+    #[test]
+    fn point_ops_match_std() {
+        independent::check_points(&make);
+    }
+
+    #[test]
+    fn derivatives_match_calculus() {
+        independent::check_derivatives(&make);
+    }
+
+    #[test]
+    fn intervals_hold_std_values_and_are_tight() {
+        independent::intervals::check_intervals(&make);
+    }
+
+    #[test]
+    fn random_functions_match_std_op_by_op() {
+        independent::intervals::check_random_functions(0..300);
+    }
 }
 
 mod taped {

@@ -1,6 +1,7 @@
 //! Shared test helpers: the evaluator conformance suite ([`suite`]) that
 //! every implementation of `Evaluator` runs (the interpreter, the JIT, the
-//! regional evaluator), the tightest-interval oracle ([`tight`]),
+//! regional evaluator), references independent of the interpreter's rules
+//! ([`independent`]), the tightest-interval oracle ([`tight`]),
 //! generators of edge values, boxes and points, and the runner of the
 //! `ibeam` binary.
 //!
@@ -10,6 +11,7 @@
 
 #[macro_use]
 pub mod suite;
+pub mod independent;
 pub mod tight;
 
 use std::process::{Command, Output};
