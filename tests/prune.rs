@@ -58,11 +58,10 @@ fn random_functions_pruned_to_boxes_keep_every_bit() {
 }
 
 /// The prospero model through the crate's own `.vm` importer, simplified
-/// as the CLI does; `None` when `../shared` is not beside the checkout.
+/// as the CLI does (see `common::models` for when it is `None`).
 fn prospero() -> Option<(Function, [Interval; 3])> {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models/prospero.vm");
-    let scene = ibeam::lang::load_scene(&path).ok()?;
+    let path = common::models::shared_model("prospero.vm")?;
+    let scene = ibeam::lang::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
     let f = ibeam::ir::passes::simplify(&scene.objects[0].function);
     let b = scene.bounds;
     Some((f, [0, 1, 2].map(|i| Interval::new(b.min[i], b.max[i]))))
@@ -71,7 +70,6 @@ fn prospero() -> Option<(Function, [Interval; 3])> {
 #[test]
 fn prospero_tiles_shrink_and_stay_exact() {
     let Some((f, bounds)) = prospero() else {
-        eprintln!("../shared/models/prospero.vm not found: skipped");
         return;
     };
     let mut r = Rng::new(7);

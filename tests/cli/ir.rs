@@ -106,11 +106,9 @@ fn ir_clif_prints_each_evaluator() {
 
 #[test]
 fn ir_reads_fidget_models() {
-    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models/colonnade.vm");
-    if !model.exists() {
-        eprintln!("skipped: {} is absent", model.display());
+    let Some(model) = crate::common::models::shared_model("colonnade.vm") else {
         return;
-    }
+    };
     let o = ibeam(&["ir", model.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stdout(&o).lines().count() > 100);

@@ -1,7 +1,8 @@
 //! Shared test helpers: the evaluator conformance suite ([`suite`]) that
 //! every implementation of `Evaluator` runs (the interpreter, the JIT, the
 //! regional evaluator), references independent of the interpreter's rules
-//! ([`independent`]), the tightest-interval oracle ([`tight`]),
+//! ([`independent`]), the tightest-interval oracle ([`tight`]), the
+//! shared models that must be present ([`models`]),
 //! generators of edge values, boxes and points, and the runner of the
 //! `ibeam` binary.
 //!
@@ -12,6 +13,7 @@
 #[macro_use]
 pub mod suite;
 pub mod independent;
+pub mod models;
 pub mod tight;
 
 use std::process::{Command, Output};

@@ -20,11 +20,10 @@ fn print_compile_times() {
 }
 
 /// The prospero model through the crate's own `.vm` importer, simplified
-/// as the CLI does; `None` when `../shared` is not beside the checkout.
+/// as the CLI does (see `common::models` for when it is `None`).
 fn prospero() -> Option<Function> {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models/prospero.vm");
-    let scene = ibeam::lang::load_scene(&path).ok()?;
+    let path = common::models::shared_model("prospero.vm")?;
+    let scene = ibeam::lang::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
     Some(ibeam::ir::passes::simplify(&scene.objects[0].function))
 }
 
@@ -33,7 +32,7 @@ fn prospero() -> Option<Function> {
 #[test]
 #[ignore]
 fn prospero_timing() {
-    let f = prospero().expect("../shared/models/prospero.vm loads");
+    let Some(f) = prospero() else { return };
     let clif = clif_text(&f).unwrap();
     for part in clif.split("; evaluator: ").skip(1) {
         let name = part.lines().next().unwrap_or("");
@@ -52,7 +51,7 @@ fn prospero_timing() {
 #[test]
 #[ignore]
 fn prospero_speed() {
-    let f = prospero().expect("../shared/models/prospero.vm loads");
+    let Some(f) = prospero() else { return };
     let jit = JitEvaluator::new(&f).unwrap();
     let n = 20_000;
     let mut r = Rng::new(1);

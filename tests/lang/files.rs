@@ -203,12 +203,13 @@ fn vm_malformed_lines() {
 
 #[test]
 fn vm_benchmark_models() {
-    let dir = root().join("../shared/models");
-    if !dir.join("prospero.vm").exists() {
-        eprintln!("skipped: {} is not present", dir.display());
+    let (Some(prospero), Some(colonnade)) = (
+        models::shared_model("prospero.vm"),
+        models::shared_model("colonnade.vm"),
+    ) else {
         return;
-    }
-    let s = load_scene(&dir.join("prospero.vm")).unwrap_or_else(|e| panic!("{e}"));
+    };
+    let s = load_scene(&prospero).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(s.objects[0].name, "prospero");
     assert_eq!(s.objects[0].function.uses_vars(), [true, true, false]);
     assert!(matches!(
@@ -216,7 +217,7 @@ fn vm_benchmark_models() {
         Projection::Orthographic { .. }
     ));
     assert!(s.objects[0].function.len() > 1000);
-    let s = load_scene(&dir.join("colonnade.vm")).unwrap_or_else(|e| panic!("{e}"));
+    let s = load_scene(&colonnade).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(s.objects[0].function.uses_vars(), [true, true, true]);
     assert!(matches!(
         s.camera.projection,

@@ -11,6 +11,8 @@ mod functions;
 mod imports;
 mod input;
 mod limits;
+#[path = "../common/models.rs"]
+mod models;
 
 use ibeam::eval::Evaluator;
 use ibeam::eval::interp::Interpreter;

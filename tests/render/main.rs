@@ -4,6 +4,8 @@
 //!
 //! One test binary; the tests are in its modules.
 
+#[path = "../common/models.rs"]
+mod models;
 mod scenes;
 mod stream;
 mod tracing;

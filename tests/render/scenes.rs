@@ -237,12 +237,11 @@ fn pruning_draws_what_the_whole_function_draws() {
         ibeam::lang::load_scene_source("carved.ib", &carved).unwrap(),
         160,
     ));
-    // The community models, when ../shared is beside the checkout: prospero
-    // (2D) and colonnade (3D, pruned per block near the surface).
+    // The community models (see `models::shared_model`): prospero (2D)
+    // and colonnade (3D, pruned per block near the surface).
     for model in ["prospero", "colonnade"] {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join(format!("../shared/models/{model}.vm"));
-        if let Ok(s) = ibeam::lang::load_scene(&path) {
+        if let Some(path) = models::shared_model(&format!("{model}.vm")) {
+            let s = ibeam::lang::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
             scenes.push((s, if model == "prospero" { 384 } else { 128 }));
         }
     }

@@ -218,12 +218,9 @@ fn overflow_to_inf_and_nan_in_part_of_the_scene() {
 
 #[test]
 fn prospero_renders_at_32() {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models/prospero.vm");
-    if !path.exists() {
-        println!("note: {} absent, prospero case skipped", path.display());
+    let Some(path) = models::shared_model("prospero.vm") else {
         return;
-    }
+    };
     let scene = ibeam::lang::load_scene(&path).unwrap();
     let ops = scene.objects[0].function.len();
     assert!(ops > 5000, "{ops} ops");

@@ -18,6 +18,8 @@
 mod adversarial;
 mod extremes;
 mod jumps;
+#[path = "../common/models.rs"]
+mod models;
 mod singular;
 
 use std::sync::Arc;
