@@ -84,7 +84,9 @@ fn scene_source(seed: u64) -> String {
     text
 }
 
-fn check_seed(seed: u64) {
+/// Whether the scene of `seed` loaded and rendered, so its pixels were
+/// compared (a generated scene may be refused, or undefined everywhere).
+fn check_seed(seed: u64) -> bool {
     let text = scene_source(seed);
     let scene = match ibeam::lang::load_scene_source("flat.ib", &text) {
         Ok(s) => s,
@@ -93,7 +95,7 @@ fn check_seed(seed: u64) {
                 !e.message.contains("internal error"),
                 "seed {seed}: loader panicked\n{text}\n{e}"
             );
-            return;
+            return false;
         }
     };
     assert!(is_flat(&scene), "seed {seed}: not flat\n{text}");
@@ -101,7 +103,7 @@ fn check_seed(seed: u64) {
     let mut opts = RenderOptions::new(48, 40);
     let beam = match render(&scene, &evals, &opts) {
         Ok(out) => out,
-        Err(RenderError::Undefined(_)) => return,
+        Err(RenderError::Undefined(_)) => return false,
         Err(e) => panic!("seed {seed}: {e}\n{text}"),
     };
     opts.method = Method::Pixel;
@@ -122,15 +124,17 @@ fn check_seed(seed: u64) {
             "seed {seed}: colour differs at pixel {k}\n{text}"
         );
     }
+    true
 }
 
 /// Anti-aliased renders trace their sub-samples with the same tracer
 /// (masked fine tiles for IAA, a finer image for grids): the beam and
-/// pixel methods must again agree to the bit.
-fn check_anti_aliased(seed: u64) {
+/// pixel methods must again agree to the bit. Whether they were compared
+/// (see [`check_seed`]).
+fn check_anti_aliased(seed: u64) -> bool {
     let text = scene_source(seed);
     let Ok(scene) = ibeam::lang::load_scene_source("flat.ib", &text) else {
-        return;
+        return false;
     };
     let evals = build_evaluators(&scene, EvalKind::Jit).unwrap();
     for aa in [
@@ -141,8 +145,10 @@ fn check_anti_aliased(seed: u64) {
         },
     ] {
         let mut opts = RenderOptions::new(24, 20);
-        let Ok(beam) = render_aa(&scene, &evals, &opts, aa) else {
-            return;
+        let beam = match render_aa(&scene, &evals, &opts, aa) {
+            Ok(out) => out,
+            Err(RenderError::Undefined(_)) => return false,
+            Err(e) => panic!("seed {seed}, {aa:?}: {e}\n{text}"),
         };
         opts.method = Method::Pixel;
         let pixel = render_aa(&scene, &evals, &opts, aa).unwrap();
@@ -155,20 +161,30 @@ fn check_anti_aliased(seed: u64) {
             assert_eq!(beam.coverage[k], pixel.coverage[k], "seed {seed}, {aa:?}");
         }
     }
+    true
 }
+
+/// Of 96 seeds, how many scenes must load and render for the comparisons
+/// to mean something (a third as many of 32 for anti-aliasing); 62 of 96
+/// and 19 of 32 do.
+const MIN_COMPARED: usize = 48;
 
 #[test]
 fn anti_aliased_flat_scenes_draw_the_pixels_of_single_rays() {
-    for seed in 0..32 {
-        check_anti_aliased(seed);
-    }
+    let compared = (0..32).filter(|&seed| check_anti_aliased(seed)).count();
+    assert!(
+        compared >= MIN_COMPARED * 32 / 96,
+        "only {compared} of 32 scenes compared"
+    );
 }
 
 #[test]
 fn flat_scenes_draw_the_pixels_of_single_rays() {
-    for seed in 0..96 {
-        check_seed(seed);
-    }
+    let compared = (0..96).filter(|&seed| check_seed(seed)).count();
+    assert!(
+        compared >= MIN_COMPARED,
+        "only {compared} of 96 scenes compared"
+    );
 }
 
 /// Some generated scenes must show both surface and background, or the
