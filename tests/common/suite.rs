@@ -13,6 +13,8 @@
 //! `exact_intervals` says whether the evaluator's intervals are those of the
 //! reference rules bit for bit (the interpreter and the JIT); an evaluator
 //! that prunes gives tighter ones, so only containment is checked there.
+//! The reference rules are the interpreter's own, so tests/conformance.rs
+//! checks it against [`super::independent`] as well.
 
 use std::sync::Arc;
 
