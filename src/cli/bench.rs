@@ -1,7 +1,7 @@
 //! `ibeam bench`: benchmarks that print tables with their baseline in the
 //! same run, so every speed claim in the README can be rerun.
 
-use super::render::MethodArg;
+use super::image::MethodArg;
 use super::{CliError, EvalKind, build_evaluator};
 use ibeam::eval::Evaluator;
 use ibeam::eval::jit::JitEvaluator;

@@ -7,6 +7,7 @@ pub mod bench;
 pub mod eval;
 pub mod export;
 pub mod formats;
+pub mod image;
 pub mod ir;
 pub mod png_stream;
 pub mod progress;

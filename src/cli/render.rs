@@ -1,51 +1,16 @@
 //! `ibeam render`: scene settings are the defaults, flags override them.
 
-use std::fmt;
 use std::fs::OpenOptions;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use super::CliError;
 use super::formats::{Format, Gathered, format_of, parse_bit_depth};
+use super::image::ImageArgs;
 use super::png_stream::{Layer, write_pngs};
 use super::progress::Bar;
 use super::view::ViewArgs;
-use super::{CliError, EvalKind};
-use ibeam::render::aa::{DEFAULT_DEPTH, DEFAULT_THRESHOLD, MAX_DEPTH};
 use ibeam::render::{Aa, Frame, MAX_SIZE, Method, RenderOptions};
-
-/// Visibility method on the command line.
-#[derive(Copy, Clone, Debug, PartialEq, Eq, clap::ValueEnum, Default)]
-pub enum MethodArg {
-    /// Beams with interval rejection and inclusion tests (guaranteed).
-    #[default]
-    Beam,
-    /// One guaranteed interval ray per pixel (slower; same pixels).
-    Pixel,
-    /// Fixed-step point sampling (fast, can miss thin features).
-    Point,
-}
-
-impl MethodArg {
-    /// The render method, with `steps` samples per ray for point sampling.
-    pub fn method(self, steps: u32) -> Method {
-        match self {
-            MethodArg::Beam => Method::Beam,
-            MethodArg::Pixel => Method::Pixel,
-            MethodArg::Point => Method::Point { steps },
-        }
-    }
-}
-
-/// As on the command line: `beam`, `pixel`, `point`.
-impl fmt::Display for MethodArg {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            MethodArg::Beam => "beam",
-            MethodArg::Pixel => "pixel",
-            MethodArg::Point => "point",
-        })
-    }
-}
 
 /// Arguments of `ibeam render`.
 #[derive(clap::Args, Clone, Debug)]
@@ -65,45 +30,15 @@ pub struct Args {
     /// subcommand's arguments as big as this one's).
     #[command(flatten)]
     pub view: Box<ViewArgs>,
-    /// Every light casts shadows, whatever the scene says.
-    #[arg(long, conflicts_with = "no_shadows")]
-    pub shadows: bool,
-    /// No light casts shadows, whatever the scene says (faster).
-    #[arg(long)]
-    pub no_shadows: bool,
-    /// Image size as WxH (default: the scene's); cost grows with the pixels.
-    #[arg(long, value_parser = parse_size)]
-    pub size: Option<(u32, u32)>,
-    /// Worker threads (default: one per core); output is the same for any.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
-    pub threads: Option<u32>,
-    /// Visibility method.
-    #[arg(long, value_enum, default_value_t = MethodArg::Beam)]
-    pub method: MethodArg,
-    /// Samples per ray for `--method point` (cost is linear in it).
-    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
-    pub steps: u32,
-    /// Anti-aliasing: `none`, `iaa` (interval adaptive: extra samples only
-    /// where the pixel's beam cannot prove one smooth surface) or `grid:N`
-    /// (N×N samples in every pixel, the baseline).
-    #[arg(long, default_value = "none", value_parser = parse_aa)]
-    pub aa: Aa,
-    /// IAA: largest width of a pixel's colour interval (linear light, per
-    /// channel) that one sample may stand for (default 1/64).
-    #[arg(long, default_value_t = DEFAULT_THRESHOLD, value_parser = parse_threshold)]
-    pub aa_threshold: f64,
-    /// IAA: levels of 2×2 splitting below a pixel (up to 4^D samples).
-    #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(0..=MAX_DEPTH as i64))]
-    pub aa_depth: u32,
+    /// How the image is traced.
+    #[command(flatten)]
+    pub image: ImageArgs,
     /// Render the slow, trustworthy reference instead: 16×16 samples per
     /// pixel, each a guaranteed interval ray (`--method pixel`) at 16× the
     /// resolution, so a 16× tighter depth tolerance; overrides --method
     /// and --aa.
     #[arg(long)]
     pub reference: bool,
-    /// Evaluator: native code (default) or the reference interpreter.
-    #[arg(long = "eval", value_enum, default_value_t = EvalKind::Jit)]
-    pub eval: EvalKind,
     /// Also write a depth image of the distance along the view direction.
     /// `.png`: 16-bit grey, mapped linearly from the nearest (0) to the
     /// farthest (65534) point of the scene bounds, background 65535 (the
@@ -124,48 +59,10 @@ pub struct Args {
     /// Write the render statistics as JSON.
     #[arg(long)]
     pub stats_json: Option<PathBuf>,
-    /// Evaluate large functions whole, without pruning them to each tile
-    /// and block (slower; for measuring what pruning saves).
-    #[arg(long)]
-    pub no_prune: bool,
     /// No progress bar and no summary (the bar, on stderr, appears only
     /// on a terminal and after half a second).
     #[arg(long)]
     pub quiet: bool,
-}
-
-/// Parses `WxH` with both sides in 1..=16384.
-pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("size `{s}` is not WxH"))?;
-    let side = |v: &str| -> Result<u32, String> {
-        let n: u32 = v
-            .trim()
-            .parse()
-            .map_err(|_| format!("size `{s}`: `{v}` is not a whole number"))?;
-        if n == 0 || n > MAX_SIZE {
-            return Err(format!("size `{s}`: each side must be in 1..={MAX_SIZE}"));
-        }
-        Ok(n)
-    };
-    Ok((side(w)?, side(h)?))
-}
-
-/// Parses an `--aa` value.
-pub fn parse_aa(s: &str) -> Result<Aa, String> {
-    Aa::parse(s).map_err(|e| e.to_string())
-}
-
-fn parse_threshold(s: &str) -> Result<f64, String> {
-    let v: f64 = s
-        .parse()
-        .map_err(|_| format!("threshold `{s}` is not a number"))?;
-    if v.is_finite() && v >= 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("threshold `{s}` must be finite and ≥ 0"))
-    }
 }
 
 /// The anti-aliasing and method the arguments ask for.
@@ -173,14 +70,7 @@ pub fn aa_and_method(args: &Args) -> (Aa, Method) {
     if args.reference {
         return (REFERENCE_AA, Method::Pixel);
     }
-    let aa = match args.aa {
-        Aa::Iaa { .. } => Aa::Iaa {
-            threshold: args.aa_threshold,
-            depth: args.aa_depth,
-        },
-        other => other,
-    };
-    (aa, args.method.method(args.steps))
+    (args.image.aa(), args.image.method())
 }
 
 /// Anti-aliasing of the reference render (with [`Method::Pixel`]).
@@ -260,21 +150,17 @@ pub fn run_with(
     if scene.objects.is_empty() {
         return Err(format!("{}: the scene has no objects", args.file.display()).into());
     }
-    let (width, height) = args.size.unwrap_or(scene.render.size);
+    let (width, height) = args.image.size.unwrap_or(scene.render.size);
     if width == 0 || height == 0 || width > MAX_SIZE || height > MAX_SIZE {
         return Err(format!("image size {width}x{height} is invalid (1..={MAX_SIZE})").into());
     }
-    if args.shadows || args.no_shadows {
-        for light in &mut scene.lights {
-            light.shadows = args.shadows;
-        }
-    }
+    args.image.set_shadows(&mut scene);
 
     // The JIT compiles lazily, on first use of each evaluator kind: this
     // times building the evaluators plus what framing compiled, and the
     // render adds the native code it compiled.
     let t = Instant::now();
-    let evaluators = super::build_evaluators(&scene, args.eval)?;
+    let evaluators = super::build_evaluators(&scene, args.image.eval)?;
     let compile_ms = t.elapsed().as_secs_f64() * 1e3;
     let compiled = |e: &[std::sync::Arc<dyn ibeam::eval::Evaluator>]| -> f64 {
         e.iter().map(|e| e.compile_time().as_secs_f64() * 1e3).sum()
@@ -293,7 +179,7 @@ pub fn run_with(
     let opts = RenderOptions {
         width,
         height,
-        threads: args.threads.map(|n| n as usize),
+        threads: args.image.threads.map(|n| n as usize),
         method,
         want_depth: args.depth.is_some(),
         want_normals: args.normals.is_some(),
@@ -302,7 +188,7 @@ pub fn run_with(
         want_buffers: false,
         // The CLI draws its own bar (`progress::Bar`).
         progress: false,
-        prune: !args.no_prune,
+        prune: !args.image.no_prune,
     };
     let mut gathered = Gathered::new(whole, (width, height));
     // Checked before any output is truncated: a scene that cannot render
@@ -341,6 +227,7 @@ pub fn run_with(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cli::image::parse_size;
 
     #[test]
     fn sizes_parse_and_reject_bad_values() {

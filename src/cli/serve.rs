@@ -21,12 +21,11 @@ use std::sync::{Arc, Mutex, PoisonError};
 
 use tiny_http::{Header, Method, Request, Response};
 
-use super::render::{MethodArg, parse_aa, parse_size};
+use super::CliError;
+use super::image::ImageArgs;
 use super::view::ViewArgs;
-use super::{CliError, EvalKind};
 use draw::{Drawn, Encoding, Failed, Slot};
 use ibeam::render::Aa;
-use ibeam::render::aa::{DEFAULT_DEPTH, DEFAULT_THRESHOLD, MAX_DEPTH};
 use scene::{Shared, lock};
 
 /// Requests handled at once; more get a 503 straight away.
@@ -52,41 +51,11 @@ pub struct Args {
     /// page starts from.
     #[command(flatten)]
     pub view: Box<ViewArgs>,
-    /// Every light casts shadows, whatever the scene says.
-    #[arg(long, conflicts_with = "no_shadows")]
-    pub shadows: bool,
-    /// No light casts shadows, whatever the scene says.
-    #[arg(long)]
-    pub no_shadows: bool,
-    /// Image size as WxH (default: the scene's).
-    #[arg(long, value_parser = parse_size)]
-    pub size: Option<(u32, u32)>,
-    /// Worker threads per render (default: one per core).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
-    pub threads: Option<u32>,
-    /// Visibility method (the page can switch it).
-    #[arg(long, value_enum, default_value_t = MethodArg::Beam)]
-    pub method: MethodArg,
-    /// Samples per ray for `--method point`.
-    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
-    pub steps: u32,
-    /// Anti-aliasing of the full image: `none`, `iaa` or `grid:N`
-    /// (previews have none; the page can switch it).
-    #[arg(long, default_value = "none", value_parser = parse_aa)]
-    pub aa: Aa,
-    /// IAA: largest width of a pixel's colour interval one sample may
-    /// stand for.
-    #[arg(long, default_value_t = DEFAULT_THRESHOLD)]
-    pub aa_threshold: f64,
-    /// IAA: levels of 2×2 splitting below a pixel.
-    #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(0..=MAX_DEPTH as i64))]
-    pub aa_depth: u32,
-    /// Evaluator: native code (default) or the reference interpreter.
-    #[arg(long = "eval", value_enum, default_value_t = EvalKind::Jit)]
-    pub eval: EvalKind,
-    /// Evaluate large functions whole, without pruning.
-    #[arg(long)]
-    pub no_prune: bool,
+    /// How each image is traced (the page can switch the method, the
+    /// anti-aliasing, the shadows and the size; previews have no
+    /// anti-aliasing).
+    #[command(flatten)]
+    pub image: ImageArgs,
     /// Print nothing but the URL (no load errors on stderr).
     #[arg(long)]
     pub quiet: bool,
@@ -105,9 +74,6 @@ struct Server {
 /// Runs `ibeam serve` until the process is stopped.
 pub fn run(args: &Args) -> Result<(), CliError> {
     let args = args.clone();
-    if !(args.aa_threshold.is_finite() && args.aa_threshold >= 0.0) {
-        return Err("--aa-threshold must be finite and ≥ 0".into());
-    }
     let http = tiny_http::Server::http((args.bind, args.port))
         .map_err(|e| format!("cannot listen on {}:{}: {e}", args.bind, args.port))?;
     let addr = http
@@ -263,8 +229,8 @@ fn state(server: &Server) -> Reply {
         "generation": s.generation,
         "error": s.error,
         "view": view,
-        "method": args.method.to_string(),
-        "aa": aa_text(args.aa),
+        "method": args.image.method.to_string(),
+        "aa": aa_text(args.image.aa),
         "preview": draw::PREVIEW,
     });
     reply(200, "application/json", json.to_string().into_bytes())

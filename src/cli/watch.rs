@@ -182,12 +182,12 @@ fn touches(event: &notify::Event, files: &[PathBuf]) -> bool {
 
 /// The preview (unless `--preview 1`), then the full image.
 fn render_twice(args: &Args, scene: &Scene, in_flight: &Shared) -> Result<(), CliError> {
-    let full = args.render.size.unwrap_or(scene.render.size);
+    let full = args.render.image.size.unwrap_or(scene.render.size);
     let k = args.preview;
     let small = ((full.0 / k).max(1), (full.1 / k).max(1));
     if k > 1 && small != full {
         let mut preview = args.render.clone();
-        preview.size = Some(small);
+        preview.image.size = Some(small);
         preview.quiet = true;
         (
             preview.depth,
@@ -206,7 +206,7 @@ fn render_twice(args: &Args, scene: &Scene, in_flight: &Shared) -> Result<(), Cl
         }
     }
     let mut whole = args.render.clone();
-    whole.size = Some(full);
+    whole.image.size = Some(full);
     let t = Instant::now();
     render_replacing(&whole, scene, in_flight)?;
     if !args.render.quiet {

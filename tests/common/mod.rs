@@ -137,24 +137,7 @@ pub fn all_ops() -> Vec<Op> {
             .iter()
             .map(|&b| Op::Binary(b, ValueId(0), ValueId(1))),
     );
-    for n in [
-        -17,
-        -4,
-        -3,
-        -2,
-        -1,
-        0,
-        1,
-        2,
-        3,
-        4,
-        5,
-        8,
-        13,
-        64,
-        i32::MAX,
-        i32::MIN,
-    ] {
+    for n in independent::POWERS {
         ops.push(Op::Powi(ValueId(0), n));
     }
     ops

@@ -100,20 +100,17 @@ fn render(
             light.shadows = s == Switch::On;
         }
     }
-    let method = query.method.unwrap_or(args.method).method(args.steps);
-    let aa = match query.aa.unwrap_or(args.aa) {
+    let image = &args.image;
+    let method = query.method.unwrap_or(image.method).method(image.steps);
+    let aa = match query.aa.unwrap_or(image.aa) {
         _ if preview => Aa::None,
-        Aa::Iaa { .. } => Aa::Iaa {
-            threshold: args.aa_threshold,
-            depth: args.aa_depth,
-        },
-        other => other,
+        aa => image.aa_with(aa),
     };
     let opts = RenderOptions {
-        threads: args.threads.map(|n| n as usize),
+        threads: image.threads.map(|n| n as usize),
         method,
         want_buffers: false,
-        prune: !args.no_prune,
+        prune: !image.no_prune,
         ..RenderOptions::new(w, h)
     };
     let frame = Frame::new(&scene, &good.evaluators, &opts, aa)

@@ -5,7 +5,7 @@
 
 use clap::Parser;
 
-use super::super::render::{MethodArg, parse_aa, parse_size};
+use super::super::image::{MethodArg, parse_aa, parse_size};
 use super::super::view::ViewArgs;
 use ibeam::render::Aa;
 

@@ -114,13 +114,9 @@ fn prepare(args: &Args, mut scene: Scene) -> Result<Good, CliError> {
     if scene.objects.is_empty() {
         return Err(format!("{}: the scene has no objects", args.file.display()).into());
     }
-    let size = args.size.unwrap_or(scene.render.size);
-    if args.shadows || args.no_shadows {
-        for light in &mut scene.lights {
-            light.shadows = args.shadows;
-        }
-    }
-    let evaluators = build_evaluators(&scene, args.eval)?;
+    let size = args.image.size.unwrap_or(scene.render.size);
+    args.image.set_shadows(&mut scene);
+    let evaluators = build_evaluators(&scene, args.image.eval)?;
     args.view
         .apply(&args.file, &mut scene, &evaluators, size, true)?;
     let mut ir = String::new();
