@@ -55,6 +55,10 @@ use crate::scene::LightKind;
 
 const MAX_SHADOW_PIECES: usize = 4000;
 
+/// How much shorter than the sweep's resolution pieces next to a
+/// segment's start may get (see `Segments::resolution`).
+const NEAR_START_SPLIT: f64 = 16.0;
+
 /// The far end of a shadow segment.
 #[derive(Copy, Clone, Debug)]
 pub(crate) enum SegEnd {
@@ -342,7 +346,7 @@ impl Segments<'_> {
                 // Positive at its start and increasing over its whole box
                 // (not only the part inside the bounds): positive at its end.
                 Piece::Increasing => sw.front = Front::Outside,
-                Piece::Open if (c - a) * self.len <= self.min_w => return false,
+                Piece::Open if (c - a) * self.len <= self.resolution(a) => return false,
                 Piece::Open => {
                     let m = 0.5 * (a + c);
                     stack.push((m, c));
@@ -351,6 +355,21 @@ impl Segments<'_> {
             }
         }
         true
+    }
+
+    // The shortest piece the sweep halves at `a` (a fraction of the
+    // segment): `min_w`, but 16 times shorter within twice `min_w` of the
+    // start. The segment starts within the refinement tolerance of the
+    // surface, and where the light grazes it (or the surface curves away)
+    // only pieces that short have a derivative enclosure tight enough to
+    // prove the segment leaving it: at `min_w` alone, isolated lit pixels
+    // were drawn shadowed.
+    fn resolution(&self, a: f64) -> f64 {
+        if a * self.len <= 2.0 * self.min_w {
+            self.min_w / NEAR_START_SPLIT
+        } else {
+            self.min_w
+        }
     }
 
     // What the tests beyond the interval one prove of the piece `[a, c]`
