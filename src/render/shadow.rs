@@ -16,7 +16,8 @@
 //! having been proven increasing, or by an interval evaluation of the
 //! piece's start (a rejected piece proves nothing about what follows it:
 //! f may be undefined at its end, see `super::proof`). A piece shorter
-//! than the resolution (a depth tolerance, about a quarter pixel) that
+//! than the resolution (a depth tolerance, about a quarter pixel, and 16
+//! times less next to the start: `Segments::resolution`) that
 //! is not free, or an exhausted budget, means shadow.
 //!
 //! In a scene large enough to prune, a piece runs the evaluators of the
