@@ -1,5 +1,5 @@
 //! `ibeam bench`: benchmarks that print tables with their baseline in the
-//! same run, so every speed claim in the README can be rerun.
+//! same run, so every speed claim in docs/performance.md can be rerun.
 
 use super::image::MethodArg;
 use super::{CliError, EvalKind, build_evaluator};

@@ -264,7 +264,7 @@ fn hundred_thousand_op_sum_of_spheres() {
     let (w, h) = (16, 16);
     // The interpreter: the JIT compiles 100,000 ops too, but its interval
     // and gradient kinds take tens of seconds to compile at that size
-    // (see the README's JIT section), too slow for CI.
+    // (see docs/performance.md, Evaluators), too slow for CI.
     let out = render_by(&scene, &interp_evaluators(&scene), w, h, Method::Beam);
     let r = (1.0 - v).sqrt();
     let want = analytic(&scene, w, h, |o, d, t0, t1| {

@@ -32,8 +32,8 @@
 //!
 //! Two environment variables exist for experiments: `IBEAM_JIT_OPT`
 //! (Cranelift's `opt_level`, default `none`) and `IBEAM_JIT_RA` (its
-//! `regalloc_algorithm`, default `backtracking`); see the README's
-//! performance notes for what they measured.
+//! `regalloc_algorithm`, default `backtracking`); docs/performance.md says
+//! what they measured.
 
 mod derive;
 mod emit;
