@@ -39,39 +39,30 @@
 //! [`Frame::with_float_layers`], the float values 16-bit PNGs and
 //! OpenEXR files are made from).
 
+// The layers, lowest first: each uses only those above it in this list
+// (`tests/architecture` checks it).
 pub mod aa;
-mod assemble;
-mod band;
-pub mod beam;
-pub mod camera;
-mod cells;
-pub mod fit;
+mod context;
+mod enclose;
 mod frame;
-mod groups;
-pub mod output;
-mod plane;
-mod probe;
-mod proof;
-pub mod ray;
-mod refine;
-pub mod shade;
-mod shadow;
-#[cfg(test)]
-mod signs_tests;
-mod slices;
-pub mod stats;
-mod subsample;
+mod light;
+mod prune;
 mod tile;
-mod tracer;
+mod trace;
+mod view;
 
 use image::{ImageBuffer, Luma, RgbImage};
 
 pub use aa::{Aa, AaError};
-pub use band::{Band, FloatLayers};
-use camera::CameraError;
+pub use context::is_flat;
+pub use context::stats::{self, RenderStats};
+pub use frame::band::{Band, FloatLayers};
 pub use frame::{Frame, Progress, render, render_aa};
-pub use stats::RenderStats;
-pub use tracer::is_flat;
+pub use light::shade;
+pub use trace::{beam, ray};
+pub use view::{camera, fit, output};
+
+use camera::CameraError;
 
 /// Side of the square tiles traced in parallel.
 pub const TILE: u32 = 32;

@@ -2,22 +2,28 @@
 //! parallel (each with its anti-aliasing), and the tiles' outputs and
 //! counters merged in tile order into the images.
 
+mod assemble;
+pub(crate) mod band;
+pub(crate) mod subsample;
+
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::aa::{self, Aa, AaError, Beside, Sampling, TileEdges};
-use super::assemble::assemble;
-use super::band::{Band, FloatLayers, band};
-use super::camera::{self, RayCamera};
-use super::stats::RenderStats;
-use super::subsample::{SplitSamples, downsample, trace_split};
-use super::tile::{ShadowHint, TileOut, TileSpec, ms_since, render_tile};
-use super::tracer::{TileState, Tracer};
-use super::{MAX_SIZE, RenderError, RenderOptions, RenderOutput, TILE, output};
 use crate::eval::Evaluator;
+use crate::render::aa::{self, Aa, AaError, Beside, Sampling, TileEdges};
+use crate::render::context::stats::RenderStats;
+use crate::render::frame::assemble::assemble;
+use crate::render::frame::band::{Band, FloatLayers, band};
+use crate::render::frame::subsample::{SplitSamples, downsample, trace_split};
+use crate::render::prune::scope::Scope;
+use crate::render::prune::scope::TileState;
+use crate::render::tile::{ShadowHint, TileOut, TileSpec, ms_since, render_tile};
+use crate::render::view::camera::{self, RayCamera};
+use crate::render::view::output;
+use crate::render::{MAX_SIZE, RenderError, RenderOptions, RenderOutput, TILE};
 use crate::scene::Scene;
 
 /// Renders `scene` with one evaluator per object (same order):
@@ -48,12 +54,12 @@ struct Fine<'a> {
     /// Entry `l` traces at 2^l× the resolution, for the split pixels
     /// sampled `l` levels below the pixel (`aa::Sampling::level`): the
     /// depth, one below it (covered pixels) and 1 (shading alone).
-    levels: Vec<Option<Tracer<'a>>>,
+    levels: Vec<Option<Scope<'a>>>,
 }
 
 impl<'a> Fine<'a> {
     // The tracer of level `l` (one exists for every level a pixel can get).
-    fn at(&self, l: u32) -> Option<&Tracer<'a>> {
+    fn at(&self, l: u32) -> Option<&Scope<'a>> {
         self.levels.get(l as usize).and_then(Option::as_ref)
     }
 }
@@ -65,7 +71,7 @@ pub struct Frame<'a> {
     evaluators: &'a [Arc<dyn Evaluator>],
     opts: RenderOptions,
     aa: Aa,
-    tr: Tracer<'a>,
+    tr: Scope<'a>,
     fine: Option<Fine<'a>>,
     pool: rayon::ThreadPool,
     bg: [f64; 3],
@@ -96,20 +102,19 @@ impl<'a> Frame<'a> {
         let (w, h) = (opts.width, opts.height);
         let s = aa.grid_factor();
         let cam = RayCamera::new(&scene.camera, w * s, h * s).map_err(RenderError::Camera)?;
-        let tr = Tracer::new(scene, evaluators, cam, opts.prune);
+        let tr = Scope::new(scene, evaluators, cam, opts.prune);
         // IAA traces each split pixel's sub-samples on the 2^level× image of
         // its level (`aa::Sampling::level`, where grid:2^level puts them),
         // with the depth tolerance of the finest level's, 2^depth×,
         // whatever the level: every sub-sample of a depth-d render has
         // grid:2^d's tolerance (a coarser one moved the points shaded).
-        let finer = |level: u32, depth: u32| -> Result<Tracer<'a>, RenderError> {
+        let finer = |level: u32, depth: u32| -> Result<Scope<'a>, RenderError> {
             let cam = RayCamera::new(&scene.camera, w << level, h << level)
                 .map_err(RenderError::Camera)?
                 .with_tolerance_of_finer(1 << (depth - level));
-            Ok(Tracer {
-                sub_samples: true,
-                ..tr.with_camera(cam)
-            })
+            let mut scope = tr.with_camera(cam);
+            scope.ctx.sub_samples = true;
+            Ok(scope)
         };
         let fine = match aa {
             Aa::Iaa { depth, .. } => {
@@ -314,14 +319,14 @@ impl<'a> Frame<'a> {
     }
 
     // Drops the tracers' groups of tiles above output row `y` (see
-    // `super::groups`), which no later row of tiles reads.
+    // `crate::render::prune::groups`), which no later row of tiles reads.
     fn release_groups_above(&self, y: u32) {
         let s = self.aa.grid_factor();
-        self.tr.groups.release_above(y * s);
+        self.tr.pruner.groups.release_above(y * s);
         if let Some(fine) = &self.fine {
             for (l, t) in fine.levels.iter().enumerate() {
                 if let Some(t) = t {
-                    t.groups.release_above(y << l);
+                    t.pruner.groups.release_above(y << l);
                 }
             }
         }
@@ -535,7 +540,7 @@ fn edges_of(t: &TileOut) -> TileEdges {
 // sub-samples traced with beams on `fine`'s images, square by square
 // (`trace_split`), each at its pixel's level (`aa::Sampling`).
 fn anti_alias(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     fine: Option<&Fine<'_>>,
     opts: &RenderOptions,
     aa: Aa,
@@ -584,7 +589,7 @@ fn anti_alias(
             ShadowHint {
                 t: if c.edge[k] { f64::NAN } else { t },
                 reach: if t.is_finite() {
-                    aa::SHADOW_REUSE_REACH * tr.cam.spacing(t)
+                    aa::SHADOW_REUSE_REACH * tr.ctx.cam.spacing(t)
                 } else {
                     0.0
                 },
@@ -629,7 +634,7 @@ fn anti_alias(
 
 #[cfg(test)]
 mod tests {
-    use super::span_union;
+    use crate::render::frame::span_union;
     use std::time::{Duration, Instant};
 
     // Compilations on several threads at once count once, and only inside

@@ -1,7 +1,7 @@
 //! Flat scenes (2D models seen along their missing axis): a quadtree of
 //! screen rectangles, with no search along the rays.
 //!
-//! In a flat scene (see `Tracer::flat`) every object's value is the same
+//! In a flat scene (see `Scope::flat`) every object's value is the same
 //! all along every ray, bit for bit: no function reads a coordinate the
 //! rays move along. A single ray ([`super::ray`]) then hits only where it
 //! starts, inside a solid (the scene's value at its clip start is below
@@ -41,15 +41,15 @@
 //! 71 ms once flat tiles stopped building every pixel's ray (`tile_rays`).
 
 use super::beam::{TileRays, clear_boxes, set_block};
-use super::camera::{PixelRay, RayGrid};
 use super::probe::Rect;
 use super::ray::trace_ray;
 use super::refine::scene_points;
-use super::tile::tile_depths;
-use super::tracer::{TileState, Tracer};
-use super::{Class, Hit};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, ray_box};
+use crate::render::prune::scope::Scope;
+use crate::render::prune::scope::TileState;
+use crate::render::view::camera::{PixelRay, RayGrid};
+use crate::render::{Class, Hit};
 
 /// Rectangles of at most this many pixels are finished without pruning
 /// (`small`): a 32×32 tile's quarters. Pruning them too, four in one
@@ -69,7 +69,7 @@ struct Plane<'g> {
     // `Y·oy` (a pixel's origin is their sum, `camera::RayGrid`); and
     // `T·d`, with d the direction every ray shares (a flat scene's camera
     // is parallel) and T the tile's range of the ray parameter
-    // (`tile::tile_depths`, which the tile's functions are pruned to), so
+    // (`TileRays::depths`, which the tile's functions are pruned to), so
     // that every rectangle's beam lies inside the tile's.
     columns: &'g [IBox],
     rows: &'g [IBox],
@@ -83,9 +83,9 @@ struct Plane<'g> {
 }
 
 impl<'g> Plane<'g> {
-    fn new(tr: &Tracer<'_>, tile: &TileRays, grid: &'g RayGrid) -> Option<Plane<'g>> {
+    fn new(tr: &Scope<'_>, tile: &TileRays, grid: &'g RayGrid) -> Option<Plane<'g>> {
         let (w, h) = (tile.w, tile.h);
-        let t = tile_depths(tr, tile)?;
+        let t = tile.depths(tr)?;
         let d = grid.shared_direction()?;
         let count = (!tile.slabs.is_empty()).then(|| {
             let stride = (w + 1) as usize;
@@ -137,10 +137,10 @@ impl<'g> Plane<'g> {
     }
 }
 
-/// Traces every pixel of a tile of a flat scene (`tr.flat`), `h` rows
+/// Traces every pixel of a tile of a flat scene (`tr.ctx.flat`), `h` rows
 /// high.
-pub(crate) fn trace_tile(tr: &Tracer<'_>, tile: &mut TileRays, h: u32, st: &mut TileState) {
-    debug_assert!(tr.flat, "only flat scenes skip the search along rays");
+pub(crate) fn trace_tile(tr: &Scope<'_>, tile: &mut TileRays, h: u32, st: &mut TileState) {
+    debug_assert!(tr.ctx.flat, "only flat scenes skip the search along rays");
     debug_assert_eq!(h, tile.h);
     // The plane borrows the tile's ray terms while the tile's results are
     // written: a copy of the grid keeps the two apart.
@@ -148,7 +148,7 @@ pub(crate) fn trace_tile(tr: &Tracer<'_>, tile: &mut TileRays, h: u32, st: &mut 
     let Some(plane) = Plane::new(tr, tile, &grid) else {
         return;
     };
-    let live: Vec<u32> = (0..tr.evals.len() as u32).collect();
+    let live: Vec<u32> = (0..tr.ctx.evals.len() as u32).collect();
     // A tile reaches here only where its group, or its own interval,
     // did not prove it empty: it is not tested as a whole, which would
     // seldom decide it (a tile wholly inside a solid: its parts say the
@@ -177,7 +177,7 @@ pub(crate) fn trace_tile(tr: &Tracer<'_>, tile: &mut TileRays, h: u32, st: &mut 
 // Decides the rectangles `rects` (the quarters of one rectangle, or the
 // whole tile) over the objects `live`.
 fn level(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     tile: &mut TileRays,
     plane: &Plane,
     rects: &[Rect],
@@ -191,9 +191,9 @@ fn level(
     let mut negative = vec![false; rects.len()];
     let mut f = vec![Interval::point(0.0); rects.len()];
     for &k in live {
-        tr.evals[k as usize].interval_batch(&boxes, &mut f);
+        tr.ctx.evals[k as usize].interval_batch(&boxes, &mut f);
         for (r, v) in f.iter().enumerate() {
-            if !super::proof::holds_no_surface(*v) {
+            if !crate::render::enclose::proof::holds_no_surface(*v) {
                 sub_live[r].push(k);
                 negative[r] |= v.hi < 0.0;
             }
@@ -223,7 +223,7 @@ fn level(
             st.stats.blocks_undecided += 1;
             // The whole tile's functions are already pruned to its beam.
             let region = (!tile.is_whole(rect))
-                .then(|| tr.region_around(boxes[r]))
+                .then(|| tr.ctx.region_around(boxes[r]))
                 .flatten();
             split.push((r, region));
         }
@@ -234,8 +234,8 @@ fn level(
         let quarters: Vec<Rect> = rects[r].quarters_by_column().collect();
         let live = &sub_live[r];
         match region.and_then(|_| pruned.next()).flatten() {
-            Some((evals, live_ops)) => {
-                let local = tr.with_evals(&evals, live_ops);
+            Some(set) => {
+                let local = tr.with_evals(&set);
                 level(&local, tile, plane, &quarters, live, st);
             }
             None => level(tr, tile, plane, &quarters, live, st),
@@ -259,7 +259,7 @@ fn level(
 // needs: an object proven positive over a rectangle stays positive over
 // its parts, and a positive value is never a start point's least.
 fn small(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     tile: &mut TileRays,
     plane: &Plane,
     rects: &[(Rect, bool)],
@@ -295,9 +295,9 @@ fn small(
         neg.clear();
         neg.resize(level.len(), false);
         for &k in live {
-            tr.evals[k as usize].interval_batch(&boxes, &mut f);
+            tr.ctx.evals[k as usize].interval_batch(&boxes, &mut f);
             for (r, v) in f.iter().enumerate() {
-                if !super::proof::holds_no_surface(*v) {
+                if !crate::render::enclose::proof::holds_no_surface(*v) {
                     keep[r] = true;
                     neg[r] |= v.hi < 0.0;
                 }
@@ -334,7 +334,7 @@ fn small(
 // hits at their start points, rays proven empty, and single rays for the
 // rest.
 fn settle(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     tile: &mut TileRays,
     open: &[(usize, bool)],
     live: &[u32],
@@ -351,7 +351,7 @@ fn settle(
         } else {
             Class::Ray
         };
-        if let (ray, Some(range)) = tile.ray_and_slab(k, &tr.bounds) {
+        if let (ray, Some(range)) = tile.ray_and_slab(k, &tr.ctx.bounds) {
             px.push((k, range, ray));
             starts.push(ray.at(range.0));
         }

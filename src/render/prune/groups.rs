@@ -1,6 +1,6 @@
 //! Evaluators pruned to groups of tiles, shared by the tiles of a group.
 //!
-//! Every tile prunes its functions to its own beam (`Tracer::pruned_to_beam`).
+//! Every tile prunes its functions to its own beam (`Scope::pruned_to_beam`).
 //! From the whole function that costs one interval pass over all of it per
 //! tile: for a model of thousands of ops, the largest single cost of a
 //! render (8 M ops pruned for prospero at 1024², 1024 tiles of 8k ops).
@@ -25,14 +25,17 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock, TryLockError};
 
-use super::TILE;
-use super::camera::CornerRays;
-use super::tracer::{PRUNE_MIN_OPS, PrunedEvals, TileState, Tracer};
 use crate::eval::Evaluator;
 use crate::eval::regional::Regional;
 use crate::eval::tape::Tape;
 use crate::interval::Interval;
 use crate::interval::boxes::IBox;
+use crate::render::TILE;
+use crate::render::context::EvalSet;
+use crate::render::context::PRUNE_MIN_OPS;
+use crate::render::prune::scope::Scope;
+use crate::render::prune::scope::TileState;
+use crate::render::view::camera::CornerRays;
 
 /// Tiles along each side of a group.
 pub(crate) const GROUP_TILES: u32 = 4;
@@ -43,14 +46,14 @@ const GROUP_SIDE: u32 = GROUP_TILES * TILE;
 /// region where they have the whole function's signs, which of its tiles (row-major,
 /// [`GROUP_TILES`] a row) they prove empty (see [`empty_tiles`]), and, in
 /// a flat scene, its other tiles' tapes (see [`TileTapes`]).
-type Group = Option<(PrunedEvals, IBox, Vec<bool>, Vec<Option<Arc<TileTapes>>>)>;
+type Group = Option<(EvalSet, IBox, Vec<bool>, Vec<Option<Arc<TileTapes>>>)>;
 
 /// A tile's tapes pruned from its group's when the group is built, all
 /// the group's tiles in one pass over each of its tapes
 /// (`Tape::prune_batch`), where each tile's own pass cost as much as a
 /// third of a flat scene's render (prospero). Only in flat scenes, whose
 /// tiles' regions are one box each that the group computes as the tile
-/// does (`tile::tile_depths` of a tile with no pixel rays).
+/// does (`TileRays::depths` of a tile with no pixel rays).
 #[derive(Clone, Debug)]
 pub(crate) struct TileTapes {
     /// The region the tapes are pruned to: the tile's beam region.
@@ -92,10 +95,10 @@ impl TileGroups {
     /// `None` when nothing prunes there.
     pub(crate) fn of_pixel(
         &self,
-        tr: &Tracer<'_>,
+        tr: &Scope<'_>,
         (x, y): (u32, u32),
         st: &mut TileState,
-    ) -> Option<(PrunedEvals, IBox, Option<Arc<TileTapes>>)> {
+    ) -> Option<(EvalSet, IBox, Option<Arc<TileTapes>>)> {
         let slot = self.built(tr, (x / GROUP_SIDE, y / GROUP_SIDE), st);
         let group = slot.get().and_then(Option::as_ref);
         group.map(|(evals, region, _, tiles)| {
@@ -106,13 +109,13 @@ impl TileGroups {
 
     // The slot of group `key`, built now if no tile has asked yet (outside
     // the map's lock: tiles of other groups go on).
-    fn built(&self, tr: &Tracer<'_>, key: (u32, u32), st: &mut TileState) -> Slot {
+    fn built(&self, tr: &Scope<'_>, key: (u32, u32), st: &mut TileState) -> Slot {
         let slot = {
             let mut map = self.groups.lock().unwrap_or_else(|e| e.into_inner());
             Arc::clone(map.entry(key).or_default())
         };
         slot.get_or_init(|| {
-            let row = tr.flat.then(|| self.row(tr, key.1, st)).flatten();
+            let row = tr.ctx.flat.then(|| self.row(tr, key.1, st)).flatten();
             let pre = row.as_ref().and_then(|r| r.get(key.0 as usize)?.as_ref());
             build(tr, key, pre, st)
         });
@@ -122,7 +125,7 @@ impl TileGroups {
     // The tapes of row `gy`'s groups, pruned now if no group of the row
     // has been built yet; `None` while another thread prunes them: the
     // group then prunes its own rather than wait (the same tapes).
-    fn row(&self, tr: &Tracer<'_>, gy: u32, st: &mut TileState) -> Option<RowTapes> {
+    fn row(&self, tr: &Scope<'_>, gy: u32, st: &mut TileState) -> Option<RowTapes> {
         let slot = {
             let mut map = self.rows.lock().unwrap_or_else(|e| e.into_inner());
             Arc::clone(map.entry(gy).or_default())
@@ -145,7 +148,7 @@ impl TileGroups {
     /// [`empty_tiles`]); false where nothing prunes.
     pub(crate) fn tile_is_empty(
         &self,
-        tr: &Tracer<'_>,
+        tr: &Scope<'_>,
         (x0, y0): (u32, u32),
         (w, h): (u32, u32),
         st: &mut TileState,
@@ -177,10 +180,10 @@ impl TileGroups {
 // The group `(gx, gy)`'s evaluators: each large function pruned to the
 // group's beam over every ray parameter at which its rays can be inside
 // the bounds, and to its slices along the rays (see
-// `Tracer::pruned_group`). A tape that does not shrink enough to answer
-// (see `Tracer::pruned_to_beam`) is kept to prune the tiles' from.
+// `Scope::pruned_group`). A tape that does not shrink enough to answer
+// (see `Scope::pruned_to_beam`) is kept to prune the tiles' from.
 fn build(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     (gx, gy): (u32, u32),
     pre: Option<&TileTapes>,
     st: &mut TileState,
@@ -189,12 +192,12 @@ fn build(
     let xs = (f64::from(x0) + 0.5, f64::from(x1) - 0.5);
     let ys = (f64::from(y0) + 0.5, f64::from(y1) - 0.5);
     let t = beam_range(tr, xs, ys)?;
-    let region = tr.beam_region(xs, ys, t)?;
+    let region = tr.ctx.beam_region(xs, ys, t)?;
     let evals = tr.pruned_group(xs, ys, t, pre, st)?;
     let beams = tile_beams(tr, (x0, y0), (x1, y1));
-    let empty = empty_tiles(&evals.0, &beams, st);
-    let tiles = if tr.flat {
-        tile_tapes(tr, &evals.0, &beams, &empty, st)
+    let empty = empty_tiles(&evals.evals, &beams, st);
+    let tiles = if tr.ctx.flat {
+        tile_tapes(tr, &evals.evals, &beams, &empty, st)
     } else {
         Vec::new()
     };
@@ -203,39 +206,40 @@ fn build(
 
 // The pixels `x0..x1 × y0..y1` of group `(gx, gy)`, as `(x0, y0), (x1,
 // y1)`.
-fn group_pixels(tr: &Tracer<'_>, (gx, gy): (u32, u32)) -> ((u32, u32), (u32, u32)) {
+fn group_pixels(tr: &Scope<'_>, (gx, gy): (u32, u32)) -> ((u32, u32), (u32, u32)) {
     let (x0, y0) = (gx * GROUP_SIDE, gy * GROUP_SIDE);
-    let x1 = (x0 + GROUP_SIDE).min(tr.cam.width);
-    let y1 = (y0 + GROUP_SIDE).min(tr.cam.height);
+    let x1 = (x0 + GROUP_SIDE).min(tr.ctx.cam.width);
+    let y1 = (y0 + GROUP_SIDE).min(tr.ctx.cam.height);
     ((x0, y0), (x1, y1))
 }
 
 // Per group of row `gy` of a flat scene: the whole functions that
-// `Tracer::pruned_group` prunes, pruned to the region it prunes the
+// `Scope::pruned_group` prunes, pruned to the region it prunes the
 // group's beam to, the row's groups in one pass over each function's
 // tape (pruning each group's from the whole function on its own was a
 // sixteenth of prospero's render).
-fn row_tapes(tr: &Tracer<'_>, gy: u32, st: &mut TileState) -> Vec<Option<TileTapes>> {
-    let groups = tr.cam.width.div_ceil(GROUP_SIDE);
+fn row_tapes(tr: &Scope<'_>, gy: u32, st: &mut TileState) -> Vec<Option<TileTapes>> {
+    let groups = tr.ctx.cam.width.div_ceil(GROUP_SIDE);
     let mut regions = Vec::with_capacity(groups as usize);
     let mut at = Vec::with_capacity(groups as usize);
     for gx in 0..groups {
         let ((x0, y0), (x1, y1)) = group_pixels(tr, (gx, gy));
         let xs = (f64::from(x0) + 0.5, f64::from(x1) - 0.5);
         let ys = (f64::from(y0) + 0.5, f64::from(y1) - 0.5);
-        let corners = tr.cam.corners(xs, ys);
-        if let Some(region) = beam_range(tr, xs, ys)
-            .and_then(|t| tr.corner_region(&corners, super::slices::group_reach(t)))
-        {
+        let corners = tr.ctx.cam.corners(xs, ys);
+        if let Some(region) = beam_range(tr, xs, ys).and_then(|t| {
+            tr.ctx
+                .corner_region(&corners, super::slices::group_reach(t))
+        }) {
             regions.push(region);
             at.push(gx as usize);
         }
     }
-    let tapes: Vec<Option<&Tape>> = (tr.evals.iter().enumerate())
+    let tapes: Vec<Option<&Tape>> = (tr.ctx.evals.iter().enumerate())
         .map(|(k, e)| {
-            tr.tapes[k]
+            tr.pruner.tapes[k]
                 .as_deref()
-                .filter(|_| tr.live_ops[k] >= PRUNE_MIN_OPS && e.as_regional().is_none())
+                .filter(|_| tr.ctx.live_ops[k] >= PRUNE_MIN_OPS && e.as_regional().is_none())
         })
         .collect();
     let mut row: Vec<Option<TileTapes>> = vec![None; groups as usize];
@@ -279,11 +283,11 @@ fn tile_slot(x: u32, y: u32) -> usize {
 
 // Per tile of a group (slot as in `empty_tiles`): the group's tapes
 // `evals` pruned to the tile's beam region, for the tiles of `beams` not
-// proven `empty`; the region is the one `Tracer::pruned_to_beam` prunes a
+// proven `empty`; the region is the one `Scope::pruned_to_beam` prunes a
 // flat tile with no pixel rays to, and a tile whose region differs
 // prunes on its own.
 fn tile_tapes(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     evals: &[Arc<dyn Evaluator>],
     beams: &[TileBeam],
     empty: &[bool],
@@ -292,7 +296,7 @@ fn tile_tapes(
     let n = (GROUP_TILES * GROUP_TILES) as usize;
     let (at, regions): (Vec<usize>, Vec<IBox>) = (beams.iter())
         .filter(|&&(slot, ..)| !empty[slot])
-        .filter_map(|(slot, corners, t)| Some((*slot, tr.corner_region(corners, *t)?)))
+        .filter_map(|(slot, corners, t)| Some((*slot, tr.ctx.corner_region(corners, *t)?)))
         .unzip();
     let tapes: Vec<Option<&Tape>> = (evals.iter())
         .map(|e| e.as_regional().map(Regional::pruned_tape))
@@ -339,7 +343,7 @@ fn empty_tiles(evals: &[Arc<dyn Evaluator>], beams: &[TileBeam], st: &mut TileSt
             None => e.interval_batch(&boxes, &mut f),
         }
         for (c, v) in clear.iter_mut().zip(&f) {
-            *c &= super::proof::holds_no_surface(*v);
+            *c &= crate::render::enclose::proof::holds_no_surface(*v);
         }
     }
     st.stats.interval_evals += (boxes.len() * evals.len()) as u64;
@@ -358,7 +362,7 @@ type TileBeam = (usize, CornerRays, Interval);
 // tracer): its slot (row-major, `GROUP_TILES` a row), the corner rays of
 // its beam, and `CornerRays::slab_range` of them, which holds every
 // pixel's slab range.
-fn tile_beams(tr: &Tracer<'_>, (x0, y0): (u32, u32), (x1, y1): (u32, u32)) -> Vec<TileBeam> {
+fn tile_beams(tr: &Scope<'_>, (x0, y0): (u32, u32), (x1, y1): (u32, u32)) -> Vec<TileBeam> {
     let mut beams = Vec::with_capacity((GROUP_TILES * GROUP_TILES) as usize);
     for ty in 0..GROUP_TILES {
         for tx in 0..GROUP_TILES {
@@ -368,8 +372,8 @@ fn tile_beams(tr: &Tracer<'_>, (x0, y0): (u32, u32), (x1, y1): (u32, u32)) -> Ve
             }
             let xs = (f64::from(tx0) + 0.5, f64::from((tx0 + TILE).min(x1)) - 0.5);
             let ys = (f64::from(ty0) + 0.5, f64::from((ty0 + TILE).min(y1)) - 0.5);
-            let corners = tr.cam.corners(xs, ys);
-            if let Some(t) = corners.slab_range(&tr.bounds) {
+            let corners = tr.ctx.cam.corners(xs, ys);
+            if let Some(t) = corners.slab_range(&tr.ctx.bounds) {
                 beams.push(((ty * GROUP_TILES + tx) as usize, corners, t));
             }
         }
@@ -379,8 +383,8 @@ fn tile_beams(tr: &Tracer<'_>, (x0, y0): (u32, u32), (x1, y1): (u32, u32)) -> Ve
 
 // `CornerRays::slab_range` of the beam through the pixel centres
 // `xs × ys`.
-fn beam_range(tr: &Tracer<'_>, xs: (f64, f64), ys: (f64, f64)) -> Option<Interval> {
-    tr.cam.corners(xs, ys).slab_range(&tr.bounds)
+fn beam_range(tr: &Scope<'_>, xs: (f64, f64), ys: (f64, f64)) -> Option<Interval> {
+    tr.ctx.cam.corners(xs, ys).slab_range(&tr.ctx.bounds)
 }
 
 #[cfg(test)]
@@ -388,8 +392,8 @@ mod tests {
     use super::*;
     use crate::scene::{Camera, Projection};
 
-    fn tracer(camera: &Camera, size: u32) -> Tracer<'static> {
-        Tracer::for_tests(camera, size)
+    fn tracer(camera: &Camera, size: u32) -> Scope<'static> {
+        Scope::for_tests(camera, size)
     }
 
     // Every pixel's clipped range lies in its group's range, and every
@@ -420,8 +424,9 @@ mod tests {
                     let (x1, y1) = ((x0 + GROUP_SIDE).min(size), (y0 + GROUP_SIDE).min(size));
                     let centres = |a: u32, b: u32| (f64::from(a) + 0.5, f64::from(b) - 0.5);
                     let range = beam_range(&tr, centres(x0, x1), centres(y0, y1));
-                    let rays = tr.cam.pixel_rays((x0, y0), (x1 - x0, y1 - y0));
-                    let slabs: Vec<_> = rays.iter().filter_map(|r| r.slab(&tr.bounds)).collect();
+                    let rays = tr.ctx.cam.pixel_rays((x0, y0), (x1 - x0, y1 - y0));
+                    let slabs: Vec<_> =
+                        rays.iter().filter_map(|r| r.slab(&tr.ctx.bounds)).collect();
                     let Some(t) = range else {
                         assert!(slabs.is_empty(), "a group whose rays meet the bounds");
                         continue;
@@ -430,13 +435,16 @@ mod tests {
                     for (a, b) in slabs {
                         assert!(t.lo <= a && b <= t.hi, "[{a}, {b}] outside {t:?}");
                     }
-                    let region = tr.beam_region(centres(x0, x1), centres(y0, y1), t).unwrap();
+                    let region = tr
+                        .ctx
+                        .beam_region(centres(x0, x1), centres(y0, y1), t)
+                        .unwrap();
                     for ty in (y0..y1).step_by(TILE as usize) {
                         for tx in (x0..x1).step_by(TILE as usize) {
                             let (tx1, ty1) = ((tx + TILE).min(x1), (ty + TILE).min(y1));
-                            let rays = tr.cam.pixel_rays((tx, ty), (tx1 - tx, ty1 - ty));
+                            let rays = tr.ctx.cam.pixel_rays((tx, ty), (tx1 - tx, ty1 - ty));
                             let (mut a, mut b) = (f64::INFINITY, f64::NEG_INFINITY);
-                            for (s0, s1) in rays.iter().filter_map(|r| r.slab(&tr.bounds)) {
+                            for (s0, s1) in rays.iter().filter_map(|r| r.slab(&tr.ctx.bounds)) {
                                 a = a.min(s0);
                                 b = b.max(s1);
                             }
@@ -444,6 +452,7 @@ mod tests {
                                 continue;
                             }
                             let tile = tr
+                                .ctx
                                 .beam_region(
                                     centres(tx, tx1),
                                     centres(ty, ty1),

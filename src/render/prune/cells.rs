@@ -25,9 +25,12 @@
 
 use std::collections::HashMap;
 
-use super::tracer::{PRUNE_MIN_OPS, PrunedEvals, TileState, Tracer};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_within};
+use crate::render::context::EvalSet;
+use crate::render::context::PRUNE_MIN_OPS;
+use crate::render::prune::scope::Scope;
+use crate::render::prune::scope::TileState;
 
 /// The finest level of cells.
 const MAX_LEVEL: u32 = 5;
@@ -44,7 +47,7 @@ type CellKey = (u32, [u32; 3]);
 #[derive(Clone, Default)]
 pub(crate) struct CellTapes {
     // Each cell's evaluators (`None`: the whole functions').
-    cells: HashMap<CellKey, Option<PrunedEvals>>,
+    cells: HashMap<CellKey, Option<EvalSet>>,
     // Ops of the tapes the cells hold.
     ops: usize,
 }
@@ -59,7 +62,7 @@ impl CellTapes {
     /// The evaluators of the smallest cell whose region holds `b`, built
     /// now if the tile has not asked yet; `None` when no cell's region
     /// holds it (it leaves the bounds) or nothing prunes there.
-    pub(crate) fn holding(tr: &Tracer<'_>, b: &IBox, st: &mut TileState) -> Option<PrunedEvals> {
+    pub(crate) fn holding(tr: &Scope<'_>, b: &IBox, st: &mut TileState) -> Option<EvalSet> {
         let key = smallest_cell(tr, b)?;
         let mut cells = std::mem::take(&mut st.cells);
         let evals = cells.evals(tr, key, st);
@@ -68,7 +71,7 @@ impl CellTapes {
     }
 
     // Cell `key`'s evaluators, building it (and its ancestors) if needed.
-    fn evals(&mut self, tr: &Tracer<'_>, key: CellKey, st: &mut TileState) -> Option<PrunedEvals> {
+    fn evals(&mut self, tr: &Scope<'_>, key: CellKey, st: &mut TileState) -> Option<EvalSet> {
         if let Some(e) = self.cells.get(&key) {
             return e.clone();
         }
@@ -80,10 +83,10 @@ impl CellTapes {
     // Prunes cell `key`'s functions from its parent's.
     fn build(
         &mut self,
-        tr: &Tracer<'_>,
+        tr: &Scope<'_>,
         (level, at): CellKey,
         st: &mut TileState,
-    ) -> Option<PrunedEvals> {
+    ) -> Option<EvalSet> {
         let parent = if level == 0 {
             None
         } else {
@@ -94,11 +97,11 @@ impl CellTapes {
         }
         let local;
         let from = match &parent {
-            Some((evals, live_ops)) => {
-                if live_ops.iter().all(|&n| n < CELL_MIN_OPS) {
+            Some(set) => {
+                if set.live_ops.iter().all(|&n| n < CELL_MIN_OPS) {
                     return parent;
                 }
-                local = tr.with_evals(evals, live_ops.clone());
+                local = tr.with_evals(set);
                 &local
             }
             None => tr,
@@ -108,11 +111,11 @@ impl CellTapes {
         // keep nearly all of it, and holding those copies spent most of a
         // tile's budget.
         let before: usize = match &parent {
-            Some((_, live_ops)) => live_ops.iter().sum(),
-            None => tr.live_ops.iter().sum(),
+            Some(set) => set.live_ops.iter().sum(),
+            None => tr.ctx.live_ops.iter().sum(),
         };
         let own = from.pruned_to(cell_region(tr, (level, at)), st);
-        match own.map(|own| (own.1.iter().sum::<usize>(), own)) {
+        match own.map(|own| (own.live_ops.iter().sum::<usize>(), own)) {
             Some((ops, own)) if 2 * ops <= before => {
                 self.ops += ops;
                 Some(own)
@@ -123,17 +126,17 @@ impl CellTapes {
 }
 
 /// The width of the finest cells (along their narrowest axis).
-pub(crate) fn finest_width(tr: &Tracer<'_>) -> f64 {
+pub(crate) fn finest_width(tr: &Scope<'_>) -> f64 {
     (0..3)
-        .map(|i| (tr.bounds.max[i] - tr.bounds.min[i]) / f64::from(1u32 << MAX_LEVEL))
+        .map(|i| (tr.ctx.bounds.max[i] - tr.ctx.bounds.min[i]) / f64::from(1u32 << MAX_LEVEL))
         .fold(f64::INFINITY, f64::min)
 }
 
 // The region of cell `key`: the cell widened by half its size each side.
-fn cell_region(tr: &Tracer<'_>, (level, at): CellKey) -> IBox {
+fn cell_region(tr: &Scope<'_>, (level, at): CellKey) -> IBox {
     let n = f64::from(1u32 << level);
     std::array::from_fn(|i| {
-        let (lo, hi) = (tr.bounds.min[i], tr.bounds.max[i]);
+        let (lo, hi) = (tr.ctx.bounds.min[i], tr.ctx.bounds.max[i]);
         let size = (hi - lo) / n;
         let i0 = f64::from(at[i]);
         Interval::new(lo + (i0 - 0.5) * size, lo + (i0 + 1.5) * size)
@@ -143,10 +146,10 @@ fn cell_region(tr: &Tracer<'_>, (level, at): CellKey) -> IBox {
 // The deepest cell whose region holds `b`: at the level whose cells are
 // as wide as `b` (or the finest), the one holding its centre, or up the
 // levels where rounding or the bounds' edge leave `b` outside it.
-fn smallest_cell(tr: &Tracer<'_>, b: &IBox) -> Option<CellKey> {
+fn smallest_cell(tr: &Scope<'_>, b: &IBox) -> Option<CellKey> {
     let mut level = MAX_LEVEL;
     for (i, c) in b.iter().enumerate() {
-        let span = tr.bounds.max[i] - tr.bounds.min[i];
+        let span = tr.ctx.bounds.max[i] - tr.ctx.bounds.min[i];
         let w = c.width();
         if span.is_nan() || span <= 0.0 || !w.is_finite() {
             return None;
@@ -159,8 +162,8 @@ fn smallest_cell(tr: &Tracer<'_>, b: &IBox) -> Option<CellKey> {
     loop {
         let n = 1u32 << level;
         let at: [u32; 3] = std::array::from_fn(|i| {
-            let span = tr.bounds.max[i] - tr.bounds.min[i];
-            let c = (b[i].mid() - tr.bounds.min[i]) / span * f64::from(n);
+            let span = tr.ctx.bounds.max[i] - tr.ctx.bounds.min[i];
+            let c = (b[i].mid() - tr.ctx.bounds.min[i]) / span * f64::from(n);
             // NaN and out-of-range centres clamp to the edge cells (the
             // region test below decides).
             c.floor().max(0.0).min(f64::from(n - 1)) as u32
@@ -181,8 +184,8 @@ mod tests {
     use crate::ir::random::Rng;
     use crate::scene::Camera;
 
-    fn tracer() -> Tracer<'static> {
-        Tracer::for_tests(&Camera::default(), 8)
+    fn tracer() -> Scope<'static> {
+        Scope::for_tests(&Camera::default(), 8)
     }
 
     // A box's cell holds it, and no cell a level deeper does: the one
@@ -197,7 +200,7 @@ mod tests {
         for _ in 0..2000 {
             let w = 2.5 * 0.5f64.powf(rng.range(0.0, 9.0));
             let b: IBox = std::array::from_fn(|i| {
-                let c = rng.range(tr.bounds.min[i] - 0.2, tr.bounds.max[i] + 0.2);
+                let c = rng.range(tr.ctx.bounds.min[i] - 0.2, tr.ctx.bounds.max[i] + 0.2);
                 let h = w * rng.range(0.0, 0.5);
                 Interval::new(c - h, c + h)
             });
@@ -220,12 +223,12 @@ mod tests {
             if level < MAX_LEVEL {
                 let n = f64::from(1u32 << (level + 1));
                 let fits = (0..3).all(|i| {
-                    let span = tr.bounds.max[i] - tr.bounds.min[i];
+                    let span = tr.ctx.bounds.max[i] - tr.ctx.bounds.min[i];
                     b[i].width() <= span / n
                 });
                 let at: [u32; 3] = std::array::from_fn(|i| {
-                    let span = tr.bounds.max[i] - tr.bounds.min[i];
-                    let c = (b[i].mid() - tr.bounds.min[i]) / span * n;
+                    let span = tr.ctx.bounds.max[i] - tr.ctx.bounds.min[i];
+                    let c = (b[i].mid() - tr.ctx.bounds.min[i]) / span * n;
                     c.floor().max(0.0).min(n - 1.0) as u32
                 });
                 let deeper = cell_region(&tr, (level + 1, at));

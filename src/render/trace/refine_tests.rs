@@ -67,7 +67,7 @@ fn roots_are_refined_to_the_root_tolerance() {
     let minus = b.constant(-1.0);
     let f = b.binary(BinaryOp::Mul, minus, f);
     let evals: Vec<Arc<dyn Evaluator>> = vec![Arc::new(Interpreter::new(b.finish(f)))];
-    let tr = Tracer::of_objects_for_tests(&evals, &[], 64);
+    let tr = Scope::of_objects_for_tests(&evals, &[], 64);
     let mut rng = Rng::new(29);
     let mut scratch = RefineScratch::default();
     let mut worst: f64 = 0.0;
@@ -82,7 +82,7 @@ fn roots_are_refined_to_the_root_tolerance() {
             dm: d,
         };
         let (a, b) = (root - rng.range(0.01, 0.5), root + rng.range(0.01, 0.5));
-        let tol = tr.cam.root_tolerance(a);
+        let tol = tr.ctx.cam.root_tolerance(a);
         let mut st = RenderStats::default();
         let alone = refine(&tr, &ray, &[0], a, b, &mut st).expect("a sign change");
         scratch.brackets = vec![Bracket { ray, a, b }];
@@ -114,7 +114,7 @@ fn batched_refinement_gives_single_refinements_bits() {
                 Arc::new(Interpreter::new(random_function(2 * seed + k, 6))) as Arc<dyn Evaluator>
             })
             .collect();
-        let tr = Tracer::of_objects_for_tests(&evals, &[], 64);
+        let tr = Scope::of_objects_for_tests(&evals, &[], 64);
         let brackets: Vec<Bracket> = (0..24)
             .map(|_| {
                 let o = [

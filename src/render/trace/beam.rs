@@ -1,7 +1,7 @@
 //! Beams: blocks of pixels traced together with interval hulls.
 //!
 //! A block's rays form a beam; its hull over a ray-parameter interval T is
-//! exact up to rounding ([`super::camera`]). The block's T range (the union
+//! exact up to rounding ([`crate::render::view::camera`]). The block's T range (the union
 //! of its pixels' slab ranges) is bisected front to back down to a width
 //! comparable with the block's footprint; pieces where every live object is
 //! strictly positive are rejected. If all of T is rejected the block is
@@ -23,19 +23,20 @@
 //! where F < 0 is settled at once: every ray hits at its start (cut-away
 //! faces, filled 2D masks). Over a block, an object's interval that
 //! straddles 0 is tightened by the mean-value form
-//! (`Tracer::interval_tight`), which pays off on the small hulls near a
+//! (`Scope::interval_tight`), which pays off on the small hulls near a
 //! surface, where the natural extension overestimates most.
 
-use super::camera::{CornerRays, PixelRay, RayGrid};
 use super::probe::{self, Floor, Form, Rect, Sweep};
-use super::proof;
 use super::ray::{scene_point, trace_ray, trace_ray_near_first};
-use super::refine::{Bracket, refine_batch, scene_points};
-use super::stats::RenderStats;
-use super::tracer::{TileState, Tracer};
-use super::{Class, Hit};
+use super::refine::{Bracket, RefineScratch, refine_batch, scene_points};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_hull, ray_box};
+use crate::render::context::stats::RenderStats;
+use crate::render::enclose::proof;
+use crate::render::prune::scope::Scope;
+use crate::render::prune::scope::TileState;
+use crate::render::view::camera::{CornerRays, PixelRay, RayGrid};
+use crate::render::{Class, Hit};
 
 /// The per-pixel data of one tile.
 pub(crate) struct TileRays {
@@ -67,9 +68,29 @@ pub(crate) struct TileRays {
     pub included: Vec<Rect>,
     /// What is known along the whole tile's beam before tracing it.
     pub top: Floor,
+    /// Buffers of batched root refinement, reused by the tile's blocks.
+    pub refine: RefineScratch,
 }
 
 impl TileRays {
+    /// The range of the ray parameter a tile's pixels are traced over: the
+    /// hull of their slab ranges, or, in a tile that holds none (see
+    /// `tile_rays`), the range of its beam inside the bounds, which holds
+    /// them all; `None` when no pixel's ray meets the bounds.
+    pub(crate) fn depths(&self, tr: &Scope<'_>) -> Option<Interval> {
+        if self.slabs.is_empty() {
+            let xs = (f64::from(self.x0) + 0.5, f64::from(self.x0 + self.w) - 0.5);
+            let ys = (f64::from(self.y0) + 0.5, f64::from(self.y0 + self.h) - 0.5);
+            return tr.ctx.cam.corners(xs, ys).slab_range(&tr.ctx.bounds);
+        }
+        let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
+        for &(a, c) in self.slabs.iter().flatten() {
+            t0 = t0.min(a);
+            t1 = t1.max(c);
+        }
+        (t0 <= t1).then(|| Interval::new(t0, t1))
+    }
+
     /// Index of the pixel in column `i`, row `j` of the tile.
     pub(crate) fn idx(&self, i: u32, j: u32) -> usize {
         (j * self.w + i) as usize
@@ -118,14 +139,14 @@ impl TileRays {
 }
 
 /// Traces every pixel of the tile with beams.
-pub(crate) fn trace_tile(tr: &Tracer<'_>, tile: &mut TileRays, h: u32, st: &mut TileState) {
+pub(crate) fn trace_tile(tr: &Scope<'_>, tile: &mut TileRays, h: u32, st: &mut TileState) {
     debug_assert_eq!(h, tile.h);
-    let live: Vec<u32> = (0..tr.evals.len() as u32).collect();
+    let live: Vec<u32> = (0..tr.ctx.evals.len() as u32).collect();
     // An IAA fine tile holds the sub-samples of a 2×2-pixel square whose
     // split pixels' area tests were each undecided: a beam over the whole
     // square almost never decides (orthocircle at 256², depth 2: 1,100
     // such tests, 3 included, none rejected), so its quarters start.
-    if tr.sub_samples && !tile.whole().is_pixel() {
+    if tr.ctx.sub_samples && !tile.whole().is_pixel() {
         split(tr, tile, tile.whole(), tile.top, &live, st);
         return;
     }
@@ -133,7 +154,7 @@ pub(crate) fn trace_tile(tr: &Tracer<'_>, tile: &mut TileRays, h: u32, st: &mut 
 }
 
 fn block(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     tile: &mut TileRays,
     b: Rect,
     floor: Floor,
@@ -160,7 +181,7 @@ fn block(
     }
     if single {
         let k = tile.idx(b.x0, b.y0);
-        let from_floor = tr.large || tr.sub_samples;
+        let from_floor = tr.ctx.large || tr.ctx.sub_samples;
         single_ray(tr, tile, k, (floor, from_floor), (t0, t1), live, st);
         return;
     }
@@ -180,7 +201,7 @@ fn block(
 /// where its slab holds none); from the floor where `from_floor` says so
 /// (see below), else from its clip start.
 pub(crate) fn single_ray(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     tile: &mut TileRays,
     k: usize,
     (floor, from_floor): (Floor, bool),
@@ -191,7 +212,7 @@ pub(crate) fn single_ray(
     let t_floor = floor.at;
     let (pt0, pt1) = tile.slabs[k].unwrap_or((t0, t1));
     let ray = tile.ray(k);
-    // In a scene large enough to prune (`Tracer::large`), the ray
+    // In a scene large enough to prune (`Scope::large`), the ray
     // starts where the blocks above it proved its beam empty
     // (`t_floor`) rather than at its clip start, when f is positive
     // there: sweeping that
@@ -209,7 +230,7 @@ pub(crate) fn single_ray(
     // IAA's base samples and sub-samples start at the floor too (their
     // masks are compared with no other method's). Both sweep the block's
     // first candidate piece first (see `probe::Floor` and
-    // `Tracer::ray_pieces`).
+    // `Scope::ray_pieces`).
     let start = if from_floor
         && t_floor > pt0
         && scene_point(tr, live, ray.at(t_floor), &mut st.stats).0 > 0.0
@@ -230,7 +251,7 @@ pub(crate) fn single_ray(
 // The beam tests of a block of several pixels over its T range: rejected,
 // included (every ray's first root bracketed), or split in four.
 fn beam_tests(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     tile: &mut TileRays,
     b: Rect,
     corners: &CornerRays,
@@ -285,12 +306,12 @@ fn beam_tests(
         // one slice of the tile (else its points run the slices' tapes).
         let bracket = tr
             .within_one_slice(ta, tb2)
-            .then(|| tr.corner_region(corners, Interval::new(ta, tb2)))
+            .then(|| tr.ctx.corner_region(corners, Interval::new(ta, tb2)))
             .flatten()
             .and_then(|region| tr.pruned_to(region, st));
         match bracket {
-            Some((evals, live_ops)) => {
-                let local = tr.with_evals(&evals, live_ops);
+            Some(set) => {
+                let local = tr.with_evals(&set);
                 include_block(&local, tile, b, ta, tb2, live, st);
             }
             None => include_block(tr, tile, b, ta, tb2, live, st),
@@ -306,7 +327,7 @@ fn beam_tests(
         live.iter()
             .copied()
             .filter(|&k| {
-                let v = tr.interval(k as usize, rest, &mut st.stats);
+                let v = tr.ctx.interval(k as usize, rest, &mut st.stats);
                 !proof::holds_no_surface(v)
             })
             .collect()
@@ -324,7 +345,7 @@ fn beam_tests(
 /// Whether every live object is proven positive or undefined over each of
 /// `boxes`, one batch per object.
 pub(crate) fn clear_boxes(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     boxes: &[IBox],
     live: &[u32],
     st: &mut TileState,
@@ -332,7 +353,7 @@ pub(crate) fn clear_boxes(
     let mut clear = vec![true; boxes.len()];
     let mut f = vec![Interval::point(0.0); boxes.len()];
     for &o in live {
-        tr.evals[o as usize].interval_batch(boxes, &mut f);
+        tr.ctx.evals[o as usize].interval_batch(boxes, &mut f);
         for (c, fi) in clear.iter_mut().zip(&f) {
             *c &= proof::holds_no_surface(*fi);
         }
@@ -349,9 +370,9 @@ const PRUNE_WINDOW: f64 = 8.0;
 
 // `split`, with the functions first pruned to the block's beam over
 // `window` (the beam of its pixel centres, whose corner rays are
-// `corners`) where that shrinks them enough (see `Tracer::pruned_to`).
+// `corners`) where that shrinks them enough (see `Scope::pruned_to`).
 fn split_pruned(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     tile: &mut TileRays,
     b: Rect,
     (corners, window): (&CornerRays, Interval),
@@ -360,11 +381,12 @@ fn split_pruned(
     st: &mut TileState,
 ) {
     let pruned = tr
+        .ctx
         .corner_region(corners, window)
         .and_then(|region| tr.pruned_to(region, st));
     match pruned {
-        Some((evals, live_ops)) => {
-            let local = tr.with_evals(&evals, live_ops);
+        Some(set) => {
+            let local = tr.with_evals(&set);
             split(&local, tile, b, floor, live, st);
         }
         None => split(tr, tile, b, floor, live, st),
@@ -373,7 +395,7 @@ fn split_pruned(
 
 // Traces the four quarters of a block.
 fn split(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     tile: &mut TileRays,
     b: Rect,
     floor: Floor,
@@ -401,7 +423,7 @@ fn split(
 // plane), any point of the stretch is on the surface; the refinement may
 // end anywhere in it, within the bracket.
 fn decreasing(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     corners: &CornerRays,
     t: Interval,
     live: &[u32],
@@ -416,15 +438,15 @@ fn decreasing(
     if let [k] = live[..] {
         // One object: the derivative's pass encloses its value too, so the
         // separate interval evaluation is saved.
-        let [f, dfdt] = tr.interval_dir(k as usize, hb, dirs, st);
+        let [f, dfdt] = tr.ctx.interval_dir(k as usize, hb, dirs, st);
         return positive(f) || proof::non_increasing(dfdt);
     }
     live.iter().all(|&k| {
         // Several: most are positive over the piece, for one interval each.
-        if positive(tr.interval(k as usize, hb, st)) {
+        if positive(tr.ctx.interval(k as usize, hb, st)) {
             return true;
         }
-        let [_, dfdt] = tr.interval_dir(k as usize, hb, dirs, st);
+        let [_, dfdt] = tr.ctx.interval_dir(k as usize, hb, dirs, st);
         proof::non_increasing(dfdt)
     })
 }
@@ -445,7 +467,7 @@ const DEEP_SPLITS: u32 = 2;
 // ray with a sign change over T still has its first root there and F ≤ 0
 // behind it.
 fn decreasing_in_pieces(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     corners: &CornerRays,
     (a, b): (f64, f64),
     live: &[u32],
@@ -467,7 +489,7 @@ fn decreasing_in_pieces(
 // over the hull of the rays' start points (each at its own clip start);
 // if so, records the hits. Agrees with the point test of single rays.
 fn all_start_inside(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     tile: &mut TileRays,
     b: Rect,
     corners: &CornerRays,
@@ -481,7 +503,7 @@ fn all_start_inside(
     // over the whole hull suffices.
     let mut inside_obj = None;
     for &k in live {
-        let v = tr.interval(k as usize, hull, st);
+        let v = tr.ctx.interval(k as usize, hull, st);
         if v.hi < 0.0 {
             inside_obj = Some(k);
             break;
@@ -530,7 +552,7 @@ fn all_start_inside(
 // beam's hull over their depths, from its four corner rays; else the hull
 // of the pixels' own start boxes, computed once per tile, which is
 // tighter where the starts spread along the rays.
-fn start_hull(tr: &Tracer<'_>, tile: &mut TileRays, b: Rect, corners: &CornerRays) -> Option<IBox> {
+fn start_hull(tr: &Scope<'_>, tile: &mut TileRays, b: Rect, corners: &CornerRays) -> Option<IBox> {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for (i, j) in b.pixels() {
         if let Some((t0, _)) = tile.slabs[tile.idx(i, j)] {
@@ -541,7 +563,7 @@ fn start_hull(tr: &Tracer<'_>, tile: &mut TileRays, b: Rect, corners: &CornerRay
     if lo > hi {
         return None;
     }
-    if hi - lo <= tr.cam.spacing(hi) {
+    if hi - lo <= tr.ctx.cam.spacing(hi) {
         return Some(corners.hull(Interval::new(lo, hi)));
     }
     if tile.starts.is_empty() {
@@ -564,7 +586,7 @@ fn start_hull(tr: &Tracer<'_>, tile: &mut TileRays, b: Rect, corners: &CornerRay
 // the pixels' searches together (`refine_batch`, the same bits as one by
 // one on the same tape). A pixel whose refinement fails gets a full ray.
 fn include_block(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     tile: &mut TileRays,
     b: Rect,
     ta: f64,
@@ -574,7 +596,7 @@ fn include_block(
 ) {
     // (pixel, its clip range, index of its bracket if it has one)
     let mut pixels: Vec<(usize, (f64, f64), Option<usize>)> = Vec::new();
-    let mut scratch = std::mem::take(&mut st.refine);
+    let mut scratch = std::mem::take(&mut tile.refine);
     let brackets = &mut scratch.brackets;
     brackets.clear();
     for (i, j) in b.pixels() {
@@ -600,7 +622,7 @@ fn include_block(
         pixels.push((k, (pt0, pt1), bracket));
     }
     let hits = refine_batch(tr, &mut scratch, live, &mut st.stats);
-    st.refine = scratch;
+    tile.refine = scratch;
     for (k, (pt0, pt1), bracket) in pixels {
         tile.hits[k] = match bracket.and_then(|i| hits[i]) {
             Some(h) if h.t >= pt0 && h.t <= pt1 => Some(h),

@@ -4,11 +4,12 @@
 
 use rayon::prelude::*;
 
-use super::RenderOptions;
-use super::probe::{Floor, Rect};
-use super::stats::RenderStats;
-use super::tile::{RootBracket, ShadowHint, TileOut, TileSpec, render_tile, squares};
-use super::tracer::Tracer;
+use crate::render::RenderOptions;
+use crate::render::context::stats::RenderStats;
+use crate::render::prune::scope::Scope;
+use crate::render::tile::{ShadowHint, TileOut, TileSpec, render_tile, squares};
+use crate::render::trace::probe::{Floor, Rect};
+use crate::render::trace::refine::RootBracket;
 
 // Averages each s×s block of a tile traced at s× resolution, in linear
 // light. Depth: the nearest hit; normals and classes: the sample at
@@ -87,7 +88,7 @@ const FINE_GROUP: u32 = 2;
 // tile (`area`: x0, y0, w, h) the mean linear colour, covered fraction
 // and nearest hit of its sub-samples (zero, zero, +inf where not split).
 pub(super) fn trace_split(
-    fine: &Tracer<'_>,
+    fine: &Scope<'_>,
     opts: &RenderOptions,
     (x0, y0, w, h): (u32, u32, u32, u32),
     (split, (floors, hints, brackets)): (&[bool], PixelFacts<'_>),

@@ -14,7 +14,7 @@
 //! (orthocircle at 256², threshold 1, one thread: the base render
 //! 100 → 72 ms). A block's beam gets the
 //! front-to-back rejection sweep of the tracer's blocks (`probe`, shared
-//! with [`super::beam`]) over its hull clipped
+//! with [`crate::render::trace::beam`]) over its hull clipped
 //! to the bounds and, where a surface remains, the inclusion test; the
 //! outcome is one of:
 //! - *background*: every ray of the block misses: no extra sample, the
@@ -82,7 +82,7 @@
 //!
 //! Every sub-sample, at whatever level, has the depth tolerance of the
 //! finest level (grid:2^depth's), and roots are refined to a sixteenth of
-//! it ([`super::camera::RayCamera::root_tolerance`]): with few samples in
+//! it ([`crate::render::view::camera::RayCamera::root_tolerance`]): with few samples in
 //! a pixel, a root off by a fraction of the sample spacing moved the point
 //! shaded enough to show in highlights. (A rule that gave covered pixels
 //! beside a full split the full depth from depth 3 on made up for the
@@ -118,16 +118,17 @@
 
 use std::fmt;
 
-use super::camera::{CornerRays, RayGrid, bounds_box};
-use super::probe::{self, Floor, Form, Rect, Sweep};
-use super::proof;
-use super::shade::colour_interval;
-use super::stats::RenderStats;
-use super::tile::RootBracket;
-use super::tracer::{TileState, Tracer};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_meet, dot, normalize_box};
 use crate::ir::prune::smooth_on;
+use crate::render::context::stats::RenderStats;
+use crate::render::enclose::proof;
+use crate::render::light::shade::colour_interval;
+use crate::render::prune::scope::Scope;
+use crate::render::prune::scope::TileState;
+use crate::render::trace::probe::{self, Floor, Form, Rect, Sweep};
+use crate::render::trace::refine::RootBracket;
+use crate::render::view::camera::{CornerRays, RayGrid, bounds_box};
 
 /// Default IAA threshold: 1/64 of the linear colour range per channel.
 pub const DEFAULT_THRESHOLD: f64 = 1.0 / 64.0;
@@ -460,7 +461,7 @@ const SMOOTH_TEST_MAX_OPS: usize = 4096;
 /// which reads the base samples, is applied afterwards
 /// ([`Classified::mark_shadow_edges`]).
 pub(crate) fn classify_tile(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     (x0, y0, w, h): (u32, u32, u32, u32),
     threshold: f64,
     st: &mut TileState,
@@ -477,9 +478,9 @@ pub(crate) fn classify_tile(
     };
     let ctx = Ctx {
         tr,
-        all: (0..tr.evals.len() as u32).collect(),
+        all: (0..tr.ctx.evals.len() as u32).collect(),
         threshold,
-        corners: RayGrid::of_pixel_corners(&tr.cam, (x0, y0), (w, h)),
+        corners: RayGrid::of_pixel_corners(&tr.ctx.cam, (x0, y0), (w, h)),
     };
     let whole = Rect {
         x0: 0,
@@ -614,7 +615,7 @@ pub(crate) fn merge_split(
 }
 
 struct Ctx<'t, 'a> {
-    tr: &'t Tracer<'a>,
+    tr: &'t Scope<'a>,
     /// Every object: a cell's beam tests consider them all.
     all: Vec<u32>,
     threshold: f64,
@@ -697,7 +698,7 @@ impl Ctx<'_, '_> {
         if let Some(d) = inherited.and_then(|br| self.test_within(&corners, floor, br, st)) {
             return d;
         }
-        let bounds = bounds_box(&tr.bounds);
+        let bounds = bounds_box(&tr.ctx.bounds);
         let t1 = far_t(&corners, &bounds);
         let t0 = floor.at.max(0.0);
         if t0.partial_cmp(&t1).is_none_or(|o| o.is_gt()) {
@@ -852,8 +853,8 @@ impl Ctx<'_, '_> {
             return None;
         }
         let mut only = None;
-        for k in 0..tr.evals.len() {
-            let f = tr.interval(k, hb, st);
+        for k in 0..tr.ctx.evals.len() {
+            let f = tr.ctx.interval(k, hb, st);
             if proof::holds_no_surface(f) {
                 continue;
             }
@@ -868,7 +869,7 @@ impl Ctx<'_, '_> {
     // Whether object k is proven continuously differentiable over `hb`
     // (`ir::prune::smooth_on`), so that no crease crosses the cell.
     fn crease_free(&self, k: usize, hb: IBox) -> bool {
-        self.tr.evals[k]
+        self.tr.ctx.evals[k]
             .function()
             .is_some_and(|f| f.len() <= SMOOTH_TEST_MAX_OPS && smooth_on(f, hb))
     }
@@ -943,10 +944,10 @@ impl Ctx<'_, '_> {
         // enclosure anyway, and the cell is included only where it proves
         // the decrease.
         if self.threshold >= 1.0 {
-            if !proof::decreasing(tr.interval_dir(k, hb, dirs, st)[1]) {
+            if !proof::decreasing(tr.ctx.interval_dir(k, hb, dirs, st)[1]) {
                 return None;
             }
-            let g = tr.interval_grad(k, hb, st);
+            let g = tr.ctx.interval_grad(k, hb, st);
             let finite = g.d.iter().all(|&d| proof::bounded(d));
             if finite && dot(&g.d, &dirs).hi < 0.0 {
                 return Some(true);
@@ -956,7 +957,7 @@ impl Ctx<'_, '_> {
             // varies smoothly over the pixel.
             return self.crease_free(k, hb).then_some(false);
         }
-        let g = tr.interval_grad(k, hb, st);
+        let g = tr.ctx.interval_grad(k, hb, st);
         if !g.d.iter().all(|&d| proof::bounded(d)) {
             return None;
         }
@@ -973,7 +974,7 @@ impl Ctx<'_, '_> {
         } else {
             return None;
         };
-        let col = colour_interval(tr, tr.colors[k], &n, &v, &hb)?;
+        let col = colour_interval(tr, tr.ctx.colors[k], &n, &v, &hb)?;
         Some(
             col.iter()
                 .all(|c| c.hi.clamp(0.0, 1.0) - c.lo.clamp(0.0, 1.0) <= self.threshold),

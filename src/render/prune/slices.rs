@@ -1,29 +1,33 @@
 //! Trees of regions along a tile's beam, or a group of tiles': the beam
 //! over its whole depth, halved along the rays into slices about as deep
 //! as the beam is wide, each slice's tape pruned from the shortest one
-//! exact on it (see [`Tracer::pruned_to_beam`]), and the slices' ends,
-//! where sweeps along rays start their pieces (`Tracer::first_pieces`).
+//! exact on it (see [`Scope::pruned_to_beam`]), and the slices' ends,
+//! where sweeps along rays start their pieces (`Scope::first_pieces`).
 
 use std::sync::Arc;
 
-use super::camera::CornerRays;
 use super::groups::TileTapes;
-use super::tracer::{
-    PRUNE_MIN_OPS, PrunedEvals, SLICE_ASPECT, SLICE_DEPTH, TileState, Tracer, gain,
-};
 use crate::eval::Evaluator;
 use crate::eval::regional::Regional;
 use crate::eval::tape::Tape;
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_within};
+use crate::render::context::EvalSet;
+use crate::render::context::PRUNE_MIN_OPS;
+use crate::render::prune::scope::SLICE_ASPECT;
+use crate::render::prune::scope::SLICE_DEPTH;
+use crate::render::prune::scope::Scope;
+use crate::render::prune::scope::TileState;
+use crate::render::prune::scope::gain;
+use crate::render::view::camera::CornerRays;
 
-impl Tracer<'_> {
+impl Scope<'_> {
     /// The interior ends, in increasing order, of the slices that
-    /// [`Tracer::pruned_to_beam`] cuts the beam through the pixel centres
+    /// [`Scope::pruned_to_beam`] cuts the beam through the pixel centres
     /// `xs × ys` over `t` into.
     pub(crate) fn slice_ends(&self, xs: (f64, f64), ys: (f64, f64), t: Interval) -> Vec<f64> {
         fn collect(
-            tr: &Tracer<'_>,
+            tr: &Scope<'_>,
             b: ((f64, f64), (f64, f64)),
             t: Interval,
             depth: u32,
@@ -52,13 +56,13 @@ impl Tracer<'_> {
         depth: u32,
         aspect: f64,
     ) -> bool {
-        !(depth == 0 || self.flat || t.width() <= aspect * self.beam_width(xs, ys, t))
+        !(depth == 0 || self.ctx.flat || t.width() <= aspect * self.beam_width(xs, ys, t))
     }
 
     // The width of the beam through the pixel centres `xs × ys` at the far
     // end of `t`.
     fn beam_width(&self, xs: (f64, f64), ys: (f64, f64), t: Interval) -> f64 {
-        let w = |r: (f64, f64)| (r.1 - r.0 + 1.0) * self.cam.spacing(t.hi);
+        let w = |r: (f64, f64)| (r.1 - r.0 + 1.0) * self.ctx.cam.spacing(t.hi);
         w(xs).max(w(ys))
     }
 
@@ -78,23 +82,28 @@ impl Tracer<'_> {
         ys: (f64, f64),
         t: Interval,
         st: &mut TileState,
-    ) -> Option<PrunedEvals> {
-        if !self.prune || !self.live_ops.iter().any(|&n| n >= PRUNE_MIN_OPS) {
+    ) -> Option<EvalSet> {
+        if !self.pruner.enabled || !self.ctx.live_ops.iter().any(|&n| n >= PRUNE_MIN_OPS) {
             return None;
         }
         // The tile prunes from its group's tapes when the group's region
         // holds the tile's (a tape is exact only on its own region).
         let pixel = (xs.0 as u32, ys.0 as u32);
-        let group = self.groups.of_pixel(self, pixel, st).filter(|(_, g, _)| {
-            self.beam_region(xs, ys, t)
-                .is_some_and(|r| box_within(&r, g))
-        });
+        let group = self
+            .pruner
+            .groups
+            .of_pixel(self, pixel, st)
+            .filter(|(_, g, _)| {
+                self.ctx
+                    .beam_region(xs, ys, t)
+                    .is_some_and(|r| box_within(&r, g))
+            });
         let tiles = group.as_ref().and_then(|(_, _, tiles)| tiles.as_deref());
         let group = group.as_ref().map(|(evals, _, _)| evals);
         self.beam_trees(xs, ys, t, (group, tiles), false, st)
     }
 
-    /// The trees of [`Tracer::pruned_to_beam`] for a group of tiles, each
+    /// The trees of [`Scope::pruned_to_beam`] for a group of tiles, each
     /// pruned from the whole function, down to slices about as deep as the
     /// group is wide (a tile's slices, four times narrower, stop at twice
     /// their width), for its tiles' slices to prune from.
@@ -107,8 +116,8 @@ impl Tracer<'_> {
         t: Interval,
         pre: Option<&TileTapes>,
         st: &mut TileState,
-    ) -> Option<PrunedEvals> {
-        if !self.prune {
+    ) -> Option<EvalSet> {
+        if !self.pruner.enabled {
             return None;
         }
         self.beam_trees(xs, ys, t, (None, pre), true, st)
@@ -122,13 +131,13 @@ impl Tracer<'_> {
         xs: (f64, f64),
         ys: (f64, f64),
         t: Interval,
-        (group, tiles): (Option<&PrunedEvals>, Option<&TileTapes>),
+        (group, tiles): (Option<&EvalSet>, Option<&TileTapes>),
         group_beam: bool,
         st: &mut TileState,
-    ) -> Option<PrunedEvals> {
-        self.replace_evals(|k, e| match &self.tapes[k] {
-            Some(tape) if self.live_ops[k] >= PRUNE_MIN_OPS && e.as_regional().is_none() => {
-                let from = group.map(|g| &g.0[k]);
+    ) -> Option<EvalSet> {
+        self.ctx.replace_evals(|k, e| match &self.pruner.tapes[k] {
+            Some(tape) if self.ctx.live_ops[k] >= PRUNE_MIN_OPS && e.as_regional().is_none() => {
+                let from = group.map(|g| &g.evals[k]);
                 let (parent, tape, above, tree) =
                     match from.and_then(|g| Some((g, g.as_regional()?))) {
                         Some((g, r)) => (g, r.pruned_tape(), (r.answer(), r.answer_len()), Some(r)),
@@ -137,7 +146,7 @@ impl Tracer<'_> {
                 let beam = Beam {
                     xs,
                     ys,
-                    corners: self.cam.corners(xs, ys),
+                    corners: self.ctx.cam.corners(xs, ys),
                     parent,
                     group: tree,
                     is_group: group_beam,
@@ -202,7 +211,7 @@ impl<'e> Beam<'e> {
     // from `tape` where that was made with its sibling's.
     fn node(
         &self,
-        tr: &Tracer<'_>,
+        tr: &Scope<'_>,
         tape: &Tape,
         (t, placed): (Interval, Placed<'_>),
         above: (&Arc<dyn Evaluator>, usize),
@@ -285,12 +294,12 @@ impl<'e> Beam<'e> {
     // The region of the beam over `t` and the smallest region of the
     // group's tree that holds it, if its tape is no longer than `tape`;
     // nothing pruned yet.
-    fn place(&self, tr: &Tracer<'_>, tape: &Tape, t: Interval) -> Option<Placed<'e>> {
+    fn place(&self, tr: &Scope<'_>, tape: &Tape, t: Interval) -> Option<Placed<'e>> {
         // A group's regions reach a little further along the rays: its
         // tiles' slices, whose ranges come from their own pixels, then
         // fit inside them despite rounding.
         let reach = if self.is_group { group_reach(t) } else { t };
-        let region = tr.corner_region(&self.corners, reach)?;
+        let region = tr.ctx.corner_region(&self.corners, reach)?;
         let held = self
             .group
             .filter(|g| box_within(&region, &g.region()))
@@ -310,7 +319,7 @@ impl<'e> Beam<'e> {
     // dispatching every op again.
     fn place_halves(
         &self,
-        tr: &Tracer<'_>,
+        tr: &Scope<'_>,
         tape: &Tape,
         halves: [Interval; 2],
         st: &mut TileState,
@@ -334,8 +343,8 @@ impl<'e> Beam<'e> {
     // width, in a 3D scene (in a flat scene nothing along the rays
     // matters, and a tile's beam prunes to the few objects that cross its
     // narrow footprint).
-    fn long(&self, tr: &Tracer<'_>, t: Interval) -> bool {
-        !tr.flat && t.width() > LONG_ASPECT * tr.beam_width(self.xs, self.ys, t)
+    fn long(&self, tr: &Scope<'_>, t: Interval) -> bool {
+        !tr.ctx.flat && t.width() > LONG_ASPECT * tr.beam_width(self.xs, self.ys, t)
     }
 }
 

@@ -15,14 +15,14 @@
 //! at q by an interval evaluation of q; further on, by the piece before
 //! having been proven increasing, or by an interval evaluation of the
 //! piece's start (a rejected piece proves nothing about what follows it:
-//! f may be undefined at its end, see `super::proof`). A piece shorter
+//! f may be undefined at its end, see `crate::render::enclose::proof`). A piece shorter
 //! than the resolution (a depth tolerance, about a quarter pixel, and 16
 //! times less next to the start: `Segments::resolution`) that
 //! is not free, or an exhausted budget, means shadow.
 //!
 //! In a scene large enough to prune, a piece runs the evaluators of the
 //! smallest cell of a loose octree over the bounds that holds it (see
-//! `super::cells`), looked up again as pieces halve: a segment through a
+//! `crate::render::prune::cells`), looked up again as pieces halve: a segment through a
 //! union of many objects meets only the few near each piece, where every
 //! piece used to run the whole function (and, for a function too long for
 //! native derivatives, its whole tape for the monotonicity test).
@@ -43,15 +43,15 @@
 
 use glam::DVec3;
 
-use super::camera::{bounds_box, normalize};
-use super::cells::{self, CellTapes};
-use super::probe;
-use super::proof;
 use super::shade::Surf;
-use super::tracer::{TileState, Tracer};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_hull, box_meet, point_box};
-use crate::render::stats::RenderStats;
+use crate::render::context::stats::RenderStats;
+use crate::render::enclose::proof;
+use crate::render::prune::cells::{self, CellTapes};
+use crate::render::prune::scope::Scope;
+use crate::render::prune::scope::TileState;
+use crate::render::view::camera::{bounds_box, normalize};
 use crate::scene::LightKind;
 
 const MAX_SHADOW_PIECES: usize = 4000;
@@ -80,7 +80,7 @@ impl SegEnd {
 }
 
 /// The unit direction from `p` towards the light, and the segment end.
-pub(crate) fn light_dir(tr: &Tracer<'_>, kind: LightKind, p: DVec3) -> Option<(DVec3, SegEnd)> {
+pub(crate) fn light_dir(tr: &Scope<'_>, kind: LightKind, p: DVec3) -> Option<(DVec3, SegEnd)> {
     match kind {
         LightKind::Point(l) => {
             let l = DVec3::from_array(l);
@@ -90,7 +90,7 @@ pub(crate) fn light_dir(tr: &Tracer<'_>, kind: LightKind, p: DVec3) -> Option<(D
         LightKind::Directional(dir) => {
             // `-x` is `x * -1.0` bit for bit (both flip the sign only).
             let d = normalize(-DVec3::from_array(dir))?;
-            Some((d, SegEnd::Offset(d * (2.0 * tr.diag))))
+            Some((d, SegEnd::Offset(d * (2.0 * tr.ctx.diag))))
         }
     }
 }
@@ -116,7 +116,7 @@ const SEGMENT_CELL_RATIO: f64 = 2.0;
 
 /// Tests one shadow beam for a set of surface points and one light.
 pub(crate) fn shadow_beam(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     surfs: &[Surf],
     kind: LightKind,
     st: &mut TileState,
@@ -145,7 +145,7 @@ pub(crate) fn shadow_beam(
 /// they are proven outside every object only if the monotonicity test on
 /// the first piece needs it (one interval evaluation per point and object).
 pub(crate) fn segment_free(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     q: IBox,
     starts: &[DVec3],
     end: SegEnd,
@@ -165,7 +165,7 @@ pub(crate) fn segment_free(
 /// returns where along the segment a point inside a solid was found, for
 /// the next sample to try.
 pub(crate) fn point_segment_free(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     start: DVec3,
     end: SegEnd,
     min_w: f64,
@@ -174,8 +174,8 @@ pub(crate) fn point_segment_free(
 ) -> (bool, Option<f64>) {
     if let Some(s) = blocker {
         let p = (start + s * end.from(start)).to_array();
-        let all = 0..tr.evals.len();
-        if inside_a_solid(tr, p, &bounds_box(&tr.bounds), all, &mut st.stats) {
+        let all = 0..tr.ctx.evals.len();
+        if inside_a_solid(tr, p, &bounds_box(&tr.ctx.bounds), all, &mut st.stats) {
             return (false, Some(s));
         }
     }
@@ -184,7 +184,7 @@ pub(crate) fn point_segment_free(
 
 // The sweep of `segment_free`, and where it found a point inside a solid.
 fn sweep_segments(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     q: IBox,
     starts: &[DVec3],
     end: SegEnd,
@@ -208,7 +208,7 @@ fn sweep_segments(
         starts,
         end,
         min_w,
-        bounds: bounds_box(&tr.bounds),
+        bounds: bounds_box(&tr.ctx.bounds),
     };
     let mut sweep = Sweep {
         pieces: 0,
@@ -229,10 +229,10 @@ fn sweep_segments(
     // of many objects (their pieces delegate to the whole function's
     // native code, about 10 µs each) and seldom reject a piece, while a
     // finest cell's few hundred ops reject most pieces at once.
-    let piece = if tr.prune && tr.large {
+    let piece = if tr.pruner.enabled && tr.ctx.large {
         cells::finest_width(tr)
     } else {
-        tr.diag / 8.0
+        tr.ctx.diag / 8.0
     };
     let levels = (len / piece).log2().ceil();
     let levels = if levels.is_finite() {
@@ -240,7 +240,7 @@ fn sweep_segments(
     } else {
         0
     };
-    let pieces = probe::equal_pieces(0.0, 1.0, 1 << levels);
+    let pieces = crate::render::prune::scope::equal_pieces(0.0, 1.0, 1 << levels);
     let free = seg.free(tr, pieces, f64::INFINITY, &mut sweep, st);
     (free, sweep.blocked_at)
 }
@@ -299,13 +299,13 @@ impl Segments<'_> {
     // holds only because pieces are popped in order, so the loop stays whole.
     fn free(
         &self,
-        tr: &Tracer<'_>,
+        tr: &Scope<'_>,
         mut stack: Vec<(f64, f64)>,
         mut scope: f64,
         sw: &mut Sweep,
         st: &mut TileState,
     ) -> bool {
-        let n = tr.evals.len();
+        let n = tr.ctx.evals.len();
         while let Some((a, c)) = stack.pop() {
             sw.pieces += 1;
             if sw.pieces > MAX_SHADOW_PIECES {
@@ -320,9 +320,9 @@ impl Segments<'_> {
             };
             // A piece narrower than the current cell's by the ratio is
             // swept, with its sub-pieces, on its own cell's evaluators.
-            if tr.prune && tr.large && (c - a) * SEGMENT_CELL_RATIO <= scope {
-                if let Some((evals, live_ops)) = CellTapes::holding(tr, &clip, st) {
-                    let local = tr.with_evals(&evals, live_ops);
+            if tr.pruner.enabled && tr.ctx.large && (c - a) * SEGMENT_CELL_RATIO <= scope {
+                if let Some(set) = CellTapes::holding(tr, &clip, st) {
+                    let local = tr.with_evals(&set);
                     if !self.free(&local, vec![(a, c)], c - a, sw, st) {
                         return false;
                     }
@@ -334,7 +334,7 @@ impl Segments<'_> {
             }
             let mut maybe: Vec<usize> = Vec::new();
             for k in 0..n {
-                if !proof::holds_no_surface(tr.interval(k, clip, &mut st.stats)) {
+                if !proof::holds_no_surface(tr.ctx.interval(k, clip, &mut st.stats)) {
                     maybe.push(k);
                 }
             }
@@ -377,7 +377,7 @@ impl Segments<'_> {
     // (box `bx`), where the objects `maybe` may vanish.
     fn piece(
         &self,
-        tr: &Tracer<'_>,
+        tr: &Scope<'_>,
         (a, c): (f64, f64),
         bx: IBox,
         maybe: &[usize],
@@ -432,14 +432,14 @@ impl Segments<'_> {
         // run a long tape (see `MONOTONE_DEFER_OPS`).
         let affordable = |k: usize| {
             c - a <= MONOTONE_ALWAYS
-                || tr.evals[k].derivatives_native()
-                || tr.live_ops[k] <= MONOTONE_DEFER_OPS
+                || tr.ctx.evals[k].derivatives_native()
+                || tr.ctx.live_ops[k] <= MONOTONE_DEFER_OPS
         };
         if ok
             && maybe.iter().all(|&k| affordable(k))
             && maybe
                 .iter()
-                .all(|&k| proof::increasing(tr.interval_dir(k, bx, self.delta, st)[1]))
+                .all(|&k| proof::increasing(tr.ctx.interval_dir(k, bx, self.delta, st)[1]))
         {
             return Piece::Increasing;
         }
@@ -451,13 +451,13 @@ impl Segments<'_> {
 // negative there: a point of a shadow segment for which this holds puts
 // the segment's start in shadow, wherever along the segment it lies.
 fn inside_a_solid(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     p: [f64; 3],
     bounds: &IBox,
     mut objects: impl Iterator<Item = usize>,
     st: &mut RenderStats,
 ) -> bool {
-    (0..3).all(|i| bounds[i].contains(p[i])) && objects.any(|k| tr.point(k, p, st) < 0.0)
+    (0..3).all(|i| bounds[i].contains(p[i])) && objects.any(|k| tr.ctx.point(k, p, st) < 0.0)
 }
 
 // What `Segments::piece` proved.
@@ -474,13 +474,13 @@ enum Piece {
 // Whether the point `p` is proven outside each of `objects`: each defined
 // and positive there (see `proof::outside_at`).
 fn outside_all(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     p: [f64; 3],
     mut objects: impl Iterator<Item = usize>,
     st: &mut RenderStats,
 ) -> bool {
     let b = point_box(p);
-    objects.all(|k| proof::outside_at(tr.interval(k, b, st)))
+    objects.all(|k| proof::outside_at(tr.ctx.interval(k, b, st)))
 }
 
 #[cfg(test)]
@@ -488,7 +488,7 @@ mod tests {
     use super::*;
     use crate::eval::build::{EvalKind, build_evaluators};
     use crate::ir::random::Rng;
-    use crate::render::camera::RayCamera;
+    use crate::render::view::camera::RayCamera;
     use crate::scene::{Bounds, Camera, Light, Object, RenderSettings, Scene};
 
     // Whatever point a blocker hint names, on the segment or off any
@@ -544,7 +544,7 @@ mod tests {
         let scene = floor_and_ball();
         let evals = build_evaluators(&scene, EvalKind::Interp).expect("evaluators");
         let cam = RayCamera::new(&scene.camera, 16, 16).expect("camera");
-        let tr = Tracer::new(&scene, &evals, cam, false);
+        let tr = Scope::new(&scene, &evals, cam, false);
         let mut st = TileState::default();
         let light = SegEnd::Point(DVec3::new(0.0, 2.0, 0.0));
         let mut rng = Rng::new(7);

@@ -1,13 +1,14 @@
 //! The interval tests of a beam, shared by the tracer's blocks
 //! ([`super::beam`]) and anti-aliasing's pixel-area cells
-//! ([`super::aa`]): the scene function over a beam piece, the front-to-back
+//! ([`crate::render::aa`]): the scene function over a beam piece, the front-to-back
 //! rejection sweep, the search for the far end of an inclusion bracket,
 //! and the quartering of a block.
 
-use super::proof::SignBound;
-use super::tracer::{TileState, Tracer};
 use crate::interval::Interval;
 use crate::interval::boxes::IBox;
+use crate::render::enclose::proof::SignBound;
+use crate::render::prune::scope::Scope;
+use crate::render::prune::scope::TileState;
 
 /// Floor of the pixel spacing a sweep's smallest piece is sized from, so
 /// that the sweep ends where the spacing vanishes (at the eye of a
@@ -84,8 +85,8 @@ impl Rect {
 
 /// The width below which a sweep stops bisecting at parameter `t`: the
 /// footprint of a block `side` pixels across.
-pub(crate) fn min_width(tr: &Tracer<'_>, side: f64, t: f64) -> f64 {
-    side * tr.cam.spacing(t).max(MIN_SPACING)
+pub(crate) fn min_width(tr: &Scope<'_>, side: f64, t: f64) -> f64 {
+    side * tr.ctx.cam.spacing(t).max(MIN_SPACING)
 }
 
 /// How each object's interval over a beam piece is taken.
@@ -94,7 +95,7 @@ pub(crate) enum Form {
     /// The natural interval extension.
     Natural,
     /// Tightened by the mean-value form, for blocks of this size class
-    /// (see `Tracer::interval_tight`).
+    /// (see `Scope::interval_tight`).
     Tight(usize),
 }
 
@@ -102,7 +103,7 @@ pub(crate) enum Form {
 /// the `live` objects, skipping those undefined on all of it (positive
 /// when all are). Signs only: each object's tape is pruned keeping signs.
 pub(crate) fn scene_signs(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     live: &[u32],
     hb: IBox,
     form: Form,
@@ -112,7 +113,7 @@ pub(crate) fn scene_signs(
     for &k in live {
         let v = match form {
             Form::Natural => {
-                let v = tr.interval(k as usize, hb, &mut st.stats);
+                let v = tr.ctx.interval(k as usize, hb, &mut st.stats);
                 if v.is_empty() {
                     continue;
                 }
@@ -196,7 +197,7 @@ pub(crate) fn sweep(
 }
 
 /// The front-to-back rejection sweep over `[t0, t1]`, cut first into
-/// `pieces` (a stack, nearest last; see `Tracer::first_pieces`): bisects nearest
+/// `pieces` (a stack, nearest last; see `Scope::first_pieces`): bisects nearest
 /// half first, drops every piece `excluded` proves free of surface, and
 /// returns the first piece it cannot drop once that piece is narrower than
 /// `min_w(start)` (or after [`MAX_SWEEP_PIECES`] pieces); `None` when the
@@ -220,20 +221,6 @@ fn first_candidate(
         stack.push((a, m));
     }
     None
-}
-
-/// `[t0, t1]` cut into `n` equal pieces, as a stack: the nearest piece
-/// last, so that it is popped first.
-pub(crate) fn equal_pieces(t0: f64, t1: f64, n: usize) -> Vec<(f64, f64)> {
-    let n = n.max(1);
-    let at = |i: usize| {
-        if i == n {
-            t1
-        } else {
-            t0 + (t1 - t0) * (i as f64 / n as f64)
-        }
-    };
-    (0..n).rev().map(|i| (at(i), at(i + 1))).collect()
 }
 
 /// Where the inclusion test of the tracer's blocks looks on past
@@ -297,6 +284,7 @@ pub(crate) fn bracket_end(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::prune::scope::equal_pieces;
 
     #[test]
     fn quarters_cover_the_block_once_in_either_order() {

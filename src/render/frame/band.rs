@@ -2,9 +2,10 @@
 //! out: the encoded images the PNGs take, and, when asked for, the float
 //! values that 16-bit and floating-point outputs need.
 
-use super::stats::RenderStats;
-use super::tile::TileOut;
-use super::{RenderOptions, output};
+use crate::render::RenderOptions;
+use crate::render::context::stats::RenderStats;
+use crate::render::tile::TileOut;
+use crate::render::view::output;
 
 /// Which float images a streamed band also carries (each costs 12 bytes a
 /// pixel of the band, on top of its encoded image).

@@ -8,12 +8,12 @@
 //! and a pixel's own agree on signs, not values, and their roots agree
 //! within the root tolerance (`signs_tests`).
 
-use super::Hit;
-use super::camera::PixelRay;
 use super::ray::scene_point;
-use super::stats::RenderStats;
-use super::tracer::Tracer;
 use crate::eval::Grad;
+use crate::render::Hit;
+use crate::render::context::stats::RenderStats;
+use crate::render::prune::scope::Scope;
+use crate::render::view::camera::PixelRay;
 
 // The shortest step, as a fraction of the tolerance, with which
 // `Illinois::next` closes a bracket behind a secant step: the bracket it
@@ -170,7 +170,7 @@ impl Illinois {
 /// show a sign change (positive at a, not positive at b): a root is then
 /// in [a, b].
 pub(crate) fn sign_change(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     ray: &PixelRay,
     live: &[u32],
     (a, b): (f64, f64),
@@ -184,7 +184,7 @@ pub(crate) fn sign_change(
 /// Refines the first root of the scene function on the pixel's ray in the
 /// bracket [a, b] (f(a) > 0 ≥ f(b) expected), returning the hit.
 pub(crate) fn refine(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     ray: &PixelRay,
     live: &[u32],
     a: f64,
@@ -192,14 +192,14 @@ pub(crate) fn refine(
     st: &mut RenderStats,
 ) -> Option<Hit> {
     let (fa, fb) = sign_change(tr, ray, live, (a, b), st)?;
-    let tol = tr.cam.root_tolerance(a);
+    let tol = tr.ctx.cam.root_tolerance(a);
     let mut evals = 0u64;
     let (t, front) = illinois_bracketed(
         |t| {
             evals += live.len() as u64;
             let p = ray.at(t);
             live.iter()
-                .map(|&k| tr.evals[k as usize].point(p))
+                .map(|&k| tr.ctx.evals[k as usize].point(p))
                 .fold(f64::INFINITY, f64::min)
         },
         a,
@@ -215,14 +215,14 @@ pub(crate) fn refine(
         t,
         obj,
         inside: false,
-        grad: Some(tr.point_grad(obj, p, st).d),
+        grad: Some(tr.ctx.point_grad(obj, p, st).d),
         front: Some(front),
     })
 }
 
 /// The object a root at `p` is on: the live object smallest there, as
 /// `scene_point` picks it; with one live object, that one, unevaluated.
-fn root_object(tr: &Tracer<'_>, live: &[u32], p: [f64; 3], st: &mut RenderStats) -> usize {
+fn root_object(tr: &Scope<'_>, live: &[u32], p: [f64; 3], st: &mut RenderStats) -> usize {
     match live {
         [only] => *only as usize,
         _ => scene_point(tr, live, p, st).1,
@@ -238,6 +238,31 @@ pub(crate) struct Bracket {
     pub a: f64,
     /// Back end of the bracket.
     pub b: f64,
+}
+
+/// A bracket proven to hold the first root of every ray of a beam (IAA's
+/// pixel-area tests, for the base sample and sub-samples of a pixel):
+/// every object is positive along the rays before `a`;
+/// over the beam's hull on `[a, b]`, inside the bounds, object `obj`
+/// alone may vanish, and its cross-section is positive at `a` and
+/// negative at `b`. So each ray's first hit is a root of `obj` in
+/// `[a, b]`. Where the beam was included, `obj` decreases strictly along
+/// every ray there (`unique`): each ray's first hit is its one root in
+/// `[a, b]`. A covered pixel's bracket is not `unique`: a ray is refined
+/// in it where `obj` is proven decreasing along that ray's own segment
+/// (one directional-derivative interval over a box a ray wide, where the
+/// pixel's hull was too wide to prove it), and traced as usual elsewhere.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub(crate) struct RootBracket {
+    /// Front end: f > 0 on every ray.
+    pub a: f64,
+    /// Back end: f < 0 on every ray.
+    pub b: f64,
+    /// The object hit.
+    pub obj: usize,
+    /// Whether `obj` is proven strictly decreasing along every ray on
+    /// `[a, b]`.
+    pub unique: bool,
 }
 
 /// The buffers [`refine_batch`] reuses from one block to the next (a
@@ -268,7 +293,7 @@ pub(crate) struct RefineScratch {
 /// same as its own call would give (the same steps on the same values),
 /// but every step's points are evaluated in one batch per object.
 pub(crate) fn refine_batch(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     scratch: &mut RefineScratch,
     live: &[u32],
     st: &mut RenderStats,
@@ -308,7 +333,7 @@ pub(crate) fn refine_batch(
     searches.extend((0..n).filter(|&i| fa[i] > 0.0 && fb[i].0 <= 0.0).map(|i| {
         let k = &brackets[i];
         let s = Illinois::new(k.a, k.b, fa[i], fb[i].0);
-        (i, s, tr.cam.root_tolerance(k.a))
+        (i, s, tr.ctx.cam.root_tolerance(k.a))
     }));
     running.clear();
     running.extend(0..searches.len());
@@ -353,7 +378,8 @@ pub(crate) fn refine_batch(
     grads.clear();
     grads.resize(points.len(), Grad::default());
     if let [only] = live {
-        tr.point_grads(*only as usize, points, &mut batch.cols, grads, st);
+        tr.ctx
+            .point_grads(*only as usize, points, &mut batch.cols, grads, st);
     } else {
         let mut on: Vec<usize> = objects.clone();
         on.sort_unstable();
@@ -365,7 +391,8 @@ pub(crate) fn refine_batch(
             at_points.extend(at.iter().map(|&j| points[j]));
             at_grads.clear();
             at_grads.resize(at.len(), Grad::default());
-            tr.point_grads(obj, at_points, &mut batch.cols, at_grads, st);
+            tr.ctx
+                .point_grads(obj, at_points, &mut batch.cols, at_grads, st);
             for (&j, g) in at.iter().zip(at_grads.iter()) {
                 grads[j] = *g;
             }
@@ -388,7 +415,7 @@ pub(crate) fn refine_batch(
 /// which a point alone may not), so the same points inside a solid; off
 /// the surface the values, and the object found smallest, may differ.
 pub(crate) fn scene_points(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     live: &[u32],
     points: &[[f64; 3]],
     st: &mut RenderStats,
@@ -425,7 +452,7 @@ impl SceneBatch {
     // object, in `live` order.
     fn run(
         &mut self,
-        tr: &Tracer<'_>,
+        tr: &Scope<'_>,
         live: &[u32],
         points: &[[f64; 3]],
         st: &mut RenderStats,
@@ -439,7 +466,7 @@ impl SceneBatch {
         self.values.resize(points.len(), 0.0);
         for &k in live {
             let [xs, ys, zs] = &self.cols;
-            tr.evals[k as usize].point_batch(xs, ys, zs, &mut self.values);
+            tr.ctx.evals[k as usize].point_batch(xs, ys, zs, &mut self.values);
             each(&self.values, k as usize);
         }
         st.point_evals += (points.len() * live.len()) as u64;
@@ -449,7 +476,7 @@ impl SceneBatch {
     // `scene_point` picks them.
     fn min_and_object(
         &mut self,
-        tr: &Tracer<'_>,
+        tr: &Scope<'_>,
         live: &[u32],
         points: &[[f64; 3]],
         st: &mut RenderStats,
@@ -473,7 +500,7 @@ impl SceneBatch {
     // `refine`'s steps take it.
     fn min(
         &mut self,
-        tr: &Tracer<'_>,
+        tr: &Scope<'_>,
         live: &[u32],
         points: &[[f64; 3]],
         st: &mut RenderStats,

@@ -13,9 +13,10 @@ use image::{ImageBuffer, RgbImage};
 use rayon::prelude::*;
 
 use super::band::{Encoded, encode};
-use super::stats::RenderStats;
-use super::tile::TileOut;
-use super::{RenderOptions, RenderOutput, TILE, output};
+use crate::render::context::stats::RenderStats;
+use crate::render::tile::TileOut;
+use crate::render::view::output;
+use crate::render::{RenderOptions, RenderOutput, TILE};
 
 /// One row of tiles' share of every output buffer.
 struct Rows<'a> {
@@ -177,7 +178,7 @@ pub(super) fn assemble(
     let depth =
         depth.map(|d| ImageBuffer::from_raw(w, h, d).expect("a buffer of 1 sample per pixel"));
     let (image, normals, classify) = (image(color), normals.map(image), class.map(image));
-    stats.output_ms = super::tile::ms_since(out_start);
+    stats.output_ms = crate::render::tile::ms_since(out_start);
     RenderOutput {
         image,
         depth,
@@ -195,7 +196,7 @@ pub(super) fn assemble(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::tracer::TileState;
+    use crate::render::prune::scope::TileState;
 
     // A tile of `w`×`h` pixels at (x0, y0) whose pixel values encode
     // their image position, so that any misplaced copy shows.

@@ -31,14 +31,15 @@
 //! start point has f < 0 (point evaluation) hits at t0: cut-away views of
 //! solids clipped by the bounds, and filled masks for 2D functions.
 
-use super::Hit;
-use super::camera::PixelRay;
-use super::proof;
 use super::refine::{refine, sign_change};
-use super::tracer::{TileState, Tracer};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, ray_box};
-use crate::render::stats::RenderStats;
+use crate::render::Hit;
+use crate::render::context::stats::RenderStats;
+use crate::render::enclose::proof;
+use crate::render::prune::scope::Scope;
+use crate::render::prune::scope::TileState;
+use crate::render::view::camera::PixelRay;
 
 // Caps that keep a pathological function from stalling a render; reaching
 // one counts as a hit at the current piece (never a silent miss).
@@ -50,14 +51,14 @@ const TANGENT_SPLIT: f64 = 64.0;
 
 /// The smallest live-object value at `p` and the object attaining it.
 pub(crate) fn scene_point(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     live: &[u32],
     p: [f64; 3],
     st: &mut RenderStats,
 ) -> (f64, usize) {
     let mut best = (f64::INFINITY, live.first().copied().unwrap_or(0) as usize);
     for &k in live {
-        let v = tr.point(k as usize, p, st);
+        let v = tr.ctx.point(k as usize, p, st);
         if v < best.0 {
             best = (v, k as usize);
         }
@@ -67,7 +68,7 @@ pub(crate) fn scene_point(
 
 /// Point test of the start: a ray that begins inside a solid hits at t0.
 pub(crate) fn starts_inside(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     ray: &PixelRay,
     live: &[u32],
     t0: f64,
@@ -86,7 +87,7 @@ pub(crate) fn starts_inside(
 /// Guaranteed first-root isolation on one ray over [t0, t1] (policy in
 /// the module doc).
 pub(crate) fn trace_ray(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     ray: &PixelRay,
     t0: f64,
     t1: f64,
@@ -101,7 +102,7 @@ pub(crate) fn trace_ray(
 /// first root of its rays most often lies there, and bisecting the whole
 /// range down to that piece's width costs as many evaluations again.
 pub(crate) fn trace_ray_near_first(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     ray: &PixelRay,
     (t0, near): (f64, f64),
     t1: f64,
@@ -136,7 +137,7 @@ const RAY_PRUNE_RATIO: f64 = 4.0;
 // the nesting changes the cost of the evaluations and the tightness of
 // their intervals, not the order in which pieces are visited.
 fn sweep_ray(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     ray: &PixelRay,
     mut stack: Vec<(f64, f64)>,
     live: &[u32],
@@ -153,7 +154,7 @@ fn sweep_ray(
         let bx = ray_box(ray.o, ray.d, Interval::new(a, b));
         cand.clear();
         for &k in live {
-            let f = tr.interval(k as usize, bx, &mut st.stats);
+            let f = tr.ctx.interval(k as usize, bx, &mut st.stats);
             if !proof::holds_no_surface(f) {
                 cand.push(k);
             }
@@ -164,11 +165,11 @@ fn sweep_ray(
         // Only a piece that may hold surface is pruned to: most pieces are
         // rejected by their first evaluation, which costs a third of a
         // pruning pass over the same tape.
-        if tr.prune
+        if tr.pruner.enabled
             && (b - a) * RAY_PRUNE_RATIO <= scope
-            && let Some((evals, live_ops)) = tr.pruned_to_ray(ray, Interval::new(a, b), st)
+            && let Some(set) = tr.pruned_to_ray(ray, Interval::new(a, b), st)
         {
-            let local = tr.with_evals(&evals, live_ops);
+            let local = tr.with_evals(&set);
             let piece = vec![(a, b)];
             if let Some(h) = sweep_ray(&local, ray, piece, live, (steps, b - a), st) {
                 return Some(h);
@@ -186,7 +187,7 @@ fn sweep_ray(
             continue;
         }
         let stt = &mut st.stats;
-        let tol = tr.cam.tolerance(a);
+        let tol = tr.ctx.cam.tolerance(a);
         if *steps >= MAX_RAY_STEPS {
             return Some(narrow_hit(tr, ray, live, a, b, stt));
         }
@@ -249,7 +250,7 @@ struct Centred {
 }
 
 /// dF/dt over a piece and F at its midpoint, from one evaluator (see
-/// `Tracer::answering`): with sign-pruned tapes (`eval::tape::Keep::Signs`)
+/// `Scope::answering`): with sign-pruned tapes (`eval::tape::Keep::Signs`)
 /// two tapes agree on signs only, and a formula that combines a value
 /// with a derivative must take both from the same one. Only `centred`
 /// builds it, so no caller can mix in another evaluation.
@@ -261,7 +262,7 @@ struct CentredParts {
 
 // The centred form of object k over the piece [a, b] whose box is `bx`.
 fn centred(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     ray: &PixelRay,
     k: usize,
     bx: IBox,
@@ -270,7 +271,7 @@ fn centred(
 ) -> Centred {
     // F at the midpoint and dF/dt over the piece from one function (see
     // `Evaluator::answering`).
-    let e = tr.answering(k, &bx);
+    let e = tr.ctx.answering(k, &bx);
     st.interval_evals += 1;
     let [_, dfdt] = e.interval_dir(bx, ray.d);
     let mut c = Centred {
@@ -295,7 +296,7 @@ fn centred(
 // A narrow piece with 0 ∈ F: refine a sign change if the ends show one,
 // else the front of the piece is the hit (tangency policy).
 fn narrow_hit(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     ray: &PixelRay,
     live: &[u32],
     a: f64,
@@ -356,7 +357,7 @@ enum Newton {
 // `na` and `nb` are evaluated for their signs alone, which every tape
 // gives alike.
 fn newton(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     ray: &PixelRay,
     k: usize,
     (a, b): (f64, f64),
@@ -385,8 +386,12 @@ fn newton(
     if na.partial_cmp(&nb).is_none_or(|o| o.is_gt()) {
         return Newton::Empty;
     }
-    let fa = tr.interval(k, ray_box(ray.o, ray.d, Interval::point(na)), st);
-    let fb = tr.interval(k, ray_box(ray.o, ray.d, Interval::point(nb)), st);
+    let fa = tr
+        .ctx
+        .interval(k, ray_box(ray.o, ray.d, Interval::point(na)), st);
+    let fb = tr
+        .ctx
+        .interval(k, ray_box(ray.o, ray.d, Interval::point(nb)), st);
     if fa.hi < 0.0 && fb.hi < 0.0 {
         return Newton::Shrunk(a, b);
     }
@@ -403,7 +408,7 @@ fn newton(
 /// The baseline: `steps` equal steps of point evaluation over [t0, t1];
 /// the first sign change is refined by Illinois.
 pub(crate) fn march(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     ray: &PixelRay,
     t0: f64,
     t1: f64,

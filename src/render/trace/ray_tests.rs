@@ -38,7 +38,7 @@ impl Evaluator for OfX {
 // Traces the ray x = -2 + t (t in [0, 4]) through `e`.
 fn trace(e: OfX) -> (Option<Hit>, RenderStats, f64) {
     let evals: Vec<Arc<dyn Evaluator>> = vec![Arc::new(e)];
-    let tr = Tracer::of_objects_for_tests(&evals, &[], 64);
+    let tr = Scope::of_objects_for_tests(&evals, &[], 64);
     let (o, d) = ([-2.0, 0.0, 0.0], [1.0, 0.0, 0.0]);
     let ray = PixelRay {
         o: point_box(o),
@@ -48,7 +48,7 @@ fn trace(e: OfX) -> (Option<Hit>, RenderStats, f64) {
     };
     let mut st = TileState::default();
     let hit = trace_ray(&tr, &ray, 0.0, 4.0, &[0], &mut st);
-    (hit, st.stats, tr.cam.tolerance(2.5))
+    (hit, st.stats, tr.ctx.cam.tolerance(2.5))
 }
 
 fn h(v: f64) -> Interval {

@@ -8,11 +8,8 @@
 
 use std::sync::Arc;
 
-use super::camera::PixelRay;
 use super::probe::{Form, scene_signs};
 use super::refine::{Bracket, RefineScratch, refine, refine_batch};
-use super::stats::RenderStats;
-use super::tracer::{TileState, Tracer};
 use crate::eval::Evaluator;
 use crate::eval::interp::Interpreter;
 use crate::eval::regional::Regional;
@@ -21,6 +18,10 @@ use crate::interval::Interval;
 use crate::interval::boxes::{IBox, point_box};
 use crate::ir::random::Rng;
 use crate::ir::{BinaryOp, Builder, Function, UnaryOp, Var};
+use crate::render::context::stats::RenderStats;
+use crate::render::prune::scope::Scope;
+use crate::render::prune::scope::TileState;
+use crate::render::view::camera::PixelRay;
 
 /// A union (one `min`) of `n` balls of radius 0.3 along the x axis, one
 /// unit apart, wobbling in y and z.
@@ -89,8 +90,8 @@ fn batched_refinement_on_a_sign_pruned_region_finds_the_whole_functions_roots() 
     let (_, whole, regional) = region_and_whole();
     let (on_whole, on_region) = ([whole], [regional]);
     let (tw, tr) = (
-        Tracer::of_objects_for_tests(&on_whole, &[], 64),
-        Tracer::of_objects_for_tests(&on_region, &[], 64),
+        Scope::of_objects_for_tests(&on_whole, &[], 64),
+        Scope::of_objects_for_tests(&on_region, &[], 64),
     );
     let mut rng = Rng::new(5);
     // Rays down through ball 3, inside the region, their brackets from
@@ -113,7 +114,7 @@ fn batched_refinement_on_a_sign_pruned_region_finds_the_whole_functions_roots() 
     for (k, got) in brackets.iter().zip(batch) {
         let got = got.expect("a sign change on the region's tape");
         let want = refine(&tw, &k.ray, &[0], k.a, k.b, &mut st).expect("and on the whole");
-        let tol = tw.cam.root_tolerance(k.a);
+        let tol = tw.ctx.cam.root_tolerance(k.a);
         assert!(
             (got.t - want.t).abs() <= tol,
             "{} vs {} (tol {tol})",
@@ -129,11 +130,11 @@ fn batched_refinement_on_a_sign_pruned_region_finds_the_whole_functions_roots() 
         assert!(cos > 1.0 - 1e-9, "normals {g:?} and {w:?}");
         // Off the surface the region's values are not the whole one's.
         let p = k.ray.at(k.a);
-        values_differ |= tr.evals[0].point(p) != tw.evals[0].point(p);
+        values_differ |= tr.ctx.evals[0].point(p) != tw.ctx.evals[0].point(p);
     }
     // The test means something only if the values differ somewhere.
     let between = [3.6, 0.0, 0.0];
-    values_differ |= tr.evals[0].point(between) != tw.evals[0].point(between);
+    values_differ |= tr.ctx.evals[0].point(between) != tw.ctx.evals[0].point(between);
     assert!(values_differ, "pruning kept every value");
 }
 
@@ -141,7 +142,7 @@ fn batched_refinement_on_a_sign_pruned_region_finds_the_whole_functions_roots() 
 fn sign_bounds_across_tapes_never_contradict_the_whole_function() {
     let (region, whole, regional) = region_and_whole();
     let on_region = [regional];
-    let tr = Tracer::of_objects_for_tests(&on_region, &[], 64);
+    let tr = Scope::of_objects_for_tests(&on_region, &[], 64);
     let mut st = TileState::default();
     let mut rng = Rng::new(9);
     let (mut proven, mut boxes) = (0, 0);

@@ -5,14 +5,15 @@
 
 use glam::DVec3;
 
-use super::camera::{normalize, normalize_with_length};
-use super::proof;
-use super::refine::illinois;
 use super::shadow::{SegEnd, light_dir, point_segment_free};
-use super::tracer::{TileState, Tracer};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, dot as dot_box, normalize_box, point_box};
-use crate::render::stats::RenderStats;
+use crate::render::context::stats::RenderStats;
+use crate::render::enclose::proof;
+use crate::render::prune::scope::Scope;
+use crate::render::prune::scope::TileState;
+use crate::render::trace::refine::illinois;
+use crate::render::view::camera::{normalize, normalize_with_length};
 use crate::scene::LightKind;
 
 /// Ambient light, as a fraction of the object colour.
@@ -97,16 +98,16 @@ impl TileSurfs {
 
 /// Surface geometry at a hit (normal from the point gradient).
 pub(crate) fn surface(
-    tr: &Tracer<'_>,
-    ray: &super::camera::PixelRay,
-    hit: &super::Hit,
+    tr: &Scope<'_>,
+    ray: &crate::render::view::camera::PixelRay,
+    hit: &crate::render::Hit,
     st: &mut RenderStats,
 ) -> Surf {
     let p = DVec3::from_array(ray.at(hit.t));
     let (dm, dm_len) = normalize_with_length(DVec3::from_array(ray.dm));
     let v = -dm.unwrap_or(DVec3::Z);
     let eps = offset_length(tr, hit.t, dm_len);
-    let color = DVec3::from_array(tr.colors[hit.obj]);
+    let color = DVec3::from_array(tr.ctx.colors[hit.obj]);
     if hit.inside {
         // A cut face at the bounds: face the viewer; its shadow segments
         // start on the face itself (inside the solid, which shadows it
@@ -123,7 +124,7 @@ pub(crate) fn surface(
     }
     let d = hit
         .grad
-        .unwrap_or_else(|| tr.point_grad(hit.obj, p.to_array(), st).d);
+        .unwrap_or_else(|| tr.ctx.point_grad(hit.obj, p.to_array(), st).d);
     let (nout, grad_len) = normalize_with_length(DVec3::from_array(d));
     let nout = nout.unwrap_or(v);
     let n = if nout.dot(v) < 0.0 { -nout } else { nout };
@@ -150,8 +151,8 @@ pub(crate) fn surface(
 /// proven outside is at hand, and twice the shadow sweep's resolution:
 /// twice the depth tolerance at `t` (`dm_len`: the length of the ray's
 /// direction), or a 10⁴th of the bounds' diagonal.
-fn offset_length(tr: &Tracer<'_>, t: f64, dm_len: f64) -> f64 {
-    (1e-4 * tr.diag).max(2.0 * tr.cam.tolerance(t) * dm_len)
+fn offset_length(tr: &Scope<'_>, t: f64, dm_len: f64) -> f64 {
+    (1e-4 * tr.ctx.diag).max(2.0 * tr.ctx.cam.tolerance(t) * dm_len)
 }
 
 /// Where on the ray a hit's shadow segments start: its bracket's front
@@ -162,17 +163,17 @@ fn offset_length(tr: &Tracer<'_>, t: f64, dm_len: f64) -> f64 {
 /// not proven outside costs the shadow sweep its monotonicity test on
 /// the first piece, and the point a shadow.
 fn segment_start(
-    tr: &Tracer<'_>,
-    ray: &super::camera::PixelRay,
+    tr: &Scope<'_>,
+    ray: &crate::render::view::camera::PixelRay,
     obj: usize,
     front: f64,
     st: &mut RenderStats,
 ) -> f64 {
-    let tol = tr.cam.root_tolerance(front);
+    let tol = tr.ctx.cam.root_tolerance(front);
     [0.0, 0.125, 0.5, 1.0]
         .into_iter()
         .map(|k| front - k * tol)
-        .find(|&t| proof::outside_at(tr.interval(obj, point_box(ray.at(t)), st)))
+        .find(|&t| proof::outside_at(tr.ctx.interval(obj, point_box(ray.at(t)), st)))
         .unwrap_or(front)
 }
 
@@ -197,9 +198,9 @@ const POLISH: f64 = 1e-6;
 /// million times tighter, and the normal is the gradient there. Where no
 /// sign change brackets the hit (a tangency), the normal is kept.
 pub(crate) fn mend_singular_normals(
-    tr: &Tracer<'_>,
-    ray_of: impl Fn(usize) -> super::camera::PixelRay,
-    hits: &[Option<super::Hit>],
+    tr: &Scope<'_>,
+    ray_of: impl Fn(usize) -> crate::render::view::camera::PixelRay,
+    hits: &[Option<crate::render::Hit>],
     surfs: &mut TileSurfs,
     st: &mut RenderStats,
 ) {
@@ -207,7 +208,7 @@ pub(crate) fn mend_singular_normals(
     if surfs.list.iter().all(|s| !s.grad_len.is_finite()) {
         return;
     }
-    let mut largest = vec![0.0f64; tr.evals.len()];
+    let mut largest = vec![0.0f64; tr.ctx.evals.len()];
     for (k, h) in hits.iter().enumerate() {
         if let (Some(h), Some(s)) = (h, surfs.get(k))
             && s.grad_len.is_finite()
@@ -225,16 +226,16 @@ pub(crate) fn mend_singular_normals(
             continue;
         }
         let ray = &ray_of(k);
-        let tol = tr.cam.tolerance(hit.t);
+        let tol = tr.ctx.cam.tolerance(hit.t);
         let (a, b) = (hit.t - 2.0 * tol, hit.t + 2.0 * tol);
-        let f = |t: f64, st: &mut RenderStats| tr.point(hit.obj, ray.at(t), st);
+        let f = |t: f64, st: &mut RenderStats| tr.ctx.point(hit.obj, ray.at(t), st);
         let (fa, fb) = (f(a, st), f(b, st));
         if !(fa.is_finite() && fb.is_finite() && (fa <= 0.0) != (fb <= 0.0)) {
             continue;
         }
         let t = illinois(|t| f(t, st), a, b, fa, fb, POLISH * tol);
         let p = DVec3::from_array(ray.at(t));
-        let g = tr.point_grad(hit.obj, p.to_array(), st);
+        let g = tr.ctx.point_grad(hit.obj, p.to_array(), st);
         let Some(nout) = normalize(DVec3::from_array(g.d)) else {
             continue;
         };
@@ -275,7 +276,7 @@ struct Memo {
 /// point but are shadowed there, for anti-aliasing to find shadow edges.
 /// `blockers` and `memo` carry what one point leaves for the next.
 pub(crate) fn shade(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     s: &Surf,
     (lit_by_beam, known): (&[bool], Option<u64>),
     (blockers, memo): (&mut [Option<f64>], &mut LightMemo),
@@ -283,10 +284,10 @@ pub(crate) fn shade(
 ) -> (DVec3, u64) {
     let mut c = s.color * AMBIENT;
     let mut shadowed = 0u64;
-    if memo.lights.len() < tr.lights.len() {
-        memo.lights.resize(tr.lights.len(), Memo::default());
+    if memo.lights.len() < tr.ctx.lights.len() {
+        memo.lights.resize(tr.ctx.lights.len(), Memo::default());
     }
-    for (li, light) in tr.lights.iter().enumerate() {
+    for (li, light) in tr.ctx.lights.iter().enumerate() {
         let m = &mut memo.lights[li];
         let directional = matches!(light.kind, LightKind::Directional(_));
         let dir = if directional {
@@ -342,7 +343,7 @@ pub(crate) fn shade(
 /// Encloses the colour [`shade`] gives (shadows aside) for every
 /// unit normal in `n`, view vector in `v` and point in `p`.
 pub(crate) fn colour_interval(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     color: [f64; 3],
     n: &IBox,
     v: &IBox,
@@ -350,7 +351,7 @@ pub(crate) fn colour_interval(
 ) -> Option<[Interval; 3]> {
     let mut c: [Interval; 3] =
         std::array::from_fn(|i| Interval::point(color[i]).mul(Interval::point(AMBIENT)));
-    for light in tr.lights {
+    for light in tr.ctx.lights {
         let l: IBox = match light.kind {
             LightKind::Directional(dir) => normalize(-DVec3::from_array(dir))?
                 .to_array()
@@ -407,7 +408,7 @@ mod tests {
                 shadows: false,
             },
         ];
-        let tr = Tracer::of_objects_for_tests(&[], &lights, 8);
+        let tr = Scope::of_objects_for_tests(&[], &lights, 8);
         let color = [0.8, 0.3, 0.2];
         let mut seed = 0x1234_5678_9abc_def0u64;
         let mut rnd = move || {

@@ -5,14 +5,19 @@ use std::time::Instant;
 
 use image::Rgb;
 
-use super::beam::{self, TileRays};
-use super::camera::RayGrid;
-use super::probe::{Floor, Rect};
-use super::shade::{self, TileSurfs};
-use super::shadow;
-use super::tracer::{MeanValuePolicy, PrunedEvals, TileState, Tracer};
-use super::{Class, Method, RenderOptions, plane, ray};
 use crate::interval::Interval;
+use crate::render::context::EvalSet;
+use crate::render::enclose::mean_value::MeanValuePolicy;
+use crate::render::light::shade::{self, TileSurfs};
+use crate::render::light::shadow;
+use crate::render::prune::scope::Scope;
+use crate::render::prune::scope::TileState;
+use crate::render::trace::beam::{self, TileRays};
+use crate::render::trace::probe::{Floor, Rect};
+use crate::render::trace::refine::{RefineScratch, RootBracket};
+use crate::render::trace::{plane, ray};
+use crate::render::view::camera::RayGrid;
+use crate::render::{Class, Method, RenderOptions};
 use crate::scene::LightKind;
 use glam::DVec3;
 
@@ -57,31 +62,6 @@ pub(crate) struct TileSpec<'m> {
     pub rays_from_floors: bool,
 }
 
-/// A bracket proven to hold the first root of every ray of a beam (IAA's
-/// pixel-area tests, for the base sample and sub-samples of a pixel):
-/// every object is positive along the rays before `a`;
-/// over the beam's hull on `[a, b]`, inside the bounds, object `obj`
-/// alone may vanish, and its cross-section is positive at `a` and
-/// negative at `b`. So each ray's first hit is a root of `obj` in
-/// `[a, b]`. Where the beam was included, `obj` decreases strictly along
-/// every ray there (`unique`): each ray's first hit is its one root in
-/// `[a, b]`. A covered pixel's bracket is not `unique`: a ray is refined
-/// in it where `obj` is proven decreasing along that ray's own segment
-/// (one directional-derivative interval over a box a ray wide, where the
-/// pixel's hull was too wide to prove it), and traced as usual elsewhere.
-#[derive(Copy, Clone, Debug, PartialEq)]
-pub(crate) struct RootBracket {
-    /// Front end: f > 0 on every ray.
-    pub a: f64,
-    /// Back end: f < 0 on every ray.
-    pub b: f64,
-    /// The object hit.
-    pub obj: usize,
-    /// Whether `obj` is proven strictly decreasing along every ray on
-    /// `[a, b]`.
-    pub unique: bool,
-}
-
 /// The shadow state of a nearby sample that a sample may reuse: IAA's
 /// sub-samples take their pixel's base sample's (see
 /// `aa::SHADOW_REUSE_REACH`).
@@ -118,14 +98,14 @@ pub(crate) struct TileOut {
     pub depth: Vec<f64>,
     /// Unit normals, if asked for; NaN where nothing was hit (kept as
     /// f64 so that float outputs get them raw and the 8-bit image's bytes
-    /// are [`super::output::normal_pixel`]'s of the same values as before).
+    /// are [`crate::render::view::output::normal_pixel`]'s of the same values as before).
     pub normals: Option<Vec<[f64; 3]>>,
     /// Classification image pixels, if asked for.
     pub class: Option<Vec<Rgb<u8>>>,
     /// Counters and the mean-value record, which anti-aliasing carries on.
     pub state: TileState,
     /// IAA: what the pixel-area tests found, for the anti-aliasing pass.
-    pub classified: Option<Box<super::aa::Classified>>,
+    pub classified: Option<Box<crate::render::aa::Classified>>,
 }
 
 /// Milliseconds since `t`.
@@ -135,7 +115,7 @@ pub(crate) fn ms_since(t: Instant) -> f64 {
 
 /// Traces and shades one tile of `tr`'s image.
 pub(crate) fn render_tile(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     opts: &RenderOptions,
     spec: TileSpec<'_>,
     background: [f64; 3],
@@ -171,10 +151,8 @@ pub(crate) fn render_tile(
     let pruned = prune_to_tile(tr, &tile, spec.h, &mut st);
     let local;
     let tr_vis = match &pruned {
-        Some(((evals, live), ends)) => {
-            local = tr
-                .with_evals(evals, live.clone())
-                .with_slice_ends(ends.clone());
+        Some((set, ends)) => {
+            local = tr.with_evals(set).with_slice_ends(ends.clone());
             &local
         }
         None => tr,
@@ -296,7 +274,7 @@ const EMPTY_TILE_MAX_OPS: usize = 4096;
 // at a floor of its own). Per-pixel rays, slabs and shading were most of
 // a sparse scene's time.
 fn proven_empty(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     opts: &RenderOptions,
     spec: &TileSpec<'_>,
     st: &mut TileState,
@@ -310,10 +288,11 @@ fn proven_empty(
     }
     // Longer functions are tested on their group's tapes, a group's tiles
     // in one batch when the group is built (`groups::empty_tiles`).
-    if tr.live_ops.iter().sum::<usize>() > EMPTY_TILE_MAX_OPS {
-        let empty = tr.prune
-            && tr.tapes.iter().any(Option::is_some)
+    if tr.ctx.live_ops.iter().sum::<usize>() > EMPTY_TILE_MAX_OPS {
+        let empty = tr.pruner.enabled
+            && tr.pruner.tapes.iter().any(Option::is_some)
             && tr
+                .pruner
                 .groups
                 .tile_is_empty(tr, (spec.x0, spec.y0), (spec.w, spec.h), st);
         st.stats.blocks_rejected += u64::from(empty);
@@ -321,14 +300,14 @@ fn proven_empty(
     }
     let xs = (f64::from(spec.x0) + 0.5, f64::from(spec.x0 + spec.w) - 0.5);
     let ys = (f64::from(spec.y0) + 0.5, f64::from(spec.y0 + spec.h) - 0.5);
-    let corners = tr.cam.corners(xs, ys);
-    let Some(t) = corners.slab_range(&tr.bounds) else {
+    let corners = tr.ctx.cam.corners(xs, ys);
+    let Some(t) = corners.slab_range(&tr.ctx.bounds) else {
         return false;
     };
     let hull = corners.hull(t);
-    let empty = (0..tr.evals.len()).all(|k| {
-        let v = tr.interval(k, hull, &mut st.stats);
-        super::proof::holds_no_surface(v)
+    let empty = (0..tr.ctx.evals.len()).all(|k| {
+        let v = tr.ctx.interval(k, hull, &mut st.stats);
+        crate::render::enclose::proof::holds_no_surface(v)
     });
     st.stats.blocks_rejected += u64::from(empty);
     empty
@@ -339,11 +318,11 @@ fn proven_empty(
 // slabs cleared). A sample whose bracket shows no sign change at points
 // (rounding at the limits of precision) is left to the beams.
 fn refine_bracketed(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     spec: &TileSpec<'_>,
     tile: &mut TileRays,
     st: &mut TileState,
-) -> Vec<(usize, super::Hit)> {
+) -> Vec<(usize, crate::render::Hit)> {
     let Some(brackets) = spec.brackets else {
         return Vec::new();
     };
@@ -358,7 +337,9 @@ fn refine_bracketed(
         if !b.unique && !decreasing_along(tr, ray, b, &mut st.stats) {
             continue;
         }
-        if let Some(h) = super::refine::refine(tr, ray, &live, b.a, b.b, &mut st.stats) {
+        if let Some(h) =
+            crate::render::trace::refine::refine(tr, ray, &live, b.a, b.b, &mut st.stats)
+        {
             tile.slabs[k] = None;
             hits.push((k, h));
         }
@@ -370,13 +351,13 @@ fn refine_bracketed(
 // `[b.a, b.b]`: then its one root there is the ray's first hit (see
 // `RootBracket`).
 fn decreasing_along(
-    tr: &Tracer<'_>,
-    ray: &super::camera::PixelRay,
+    tr: &Scope<'_>,
+    ray: &crate::render::view::camera::PixelRay,
     b: &RootBracket,
-    st: &mut super::stats::RenderStats,
+    st: &mut crate::render::context::stats::RenderStats,
 ) -> bool {
     let bx = crate::interval::boxes::ray_box(ray.o, ray.d, Interval::new(b.a, b.b));
-    super::proof::decreasing(tr.interval_dir(b.obj, bx, ray.d, st)[1])
+    crate::render::enclose::proof::decreasing(tr.ctx.interval_dir(b.obj, bx, ray.d, st)[1])
 }
 
 // The tile's pixel rays and their ranges inside the bounds, nothing traced.
@@ -386,10 +367,10 @@ fn decreasing_along(
 // `TileRays::ray` and `TileRays::slab` build (the same bits). Unless the
 // pixels are masked or floored, or classified (which marks every pixel
 // outside the bounds).
-fn tile_rays(tr: &Tracer<'_>, opts: &RenderOptions, spec: &TileSpec<'_>) -> TileRays {
+fn tile_rays(tr: &Scope<'_>, opts: &RenderOptions, spec: &TileSpec<'_>) -> TileRays {
     let n = (spec.w * spec.h) as usize;
-    let grid = RayGrid::new(&tr.cam, (spec.x0, spec.y0), (spec.w, spec.h));
-    let lazy = tr.flat
+    let grid = RayGrid::new(&tr.ctx.cam, (spec.x0, spec.y0), (spec.w, spec.h));
+    let lazy = tr.ctx.flat
         && opts.method == Method::Beam
         && spec.mask.is_none()
         && spec.floors.is_none()
@@ -402,7 +383,7 @@ fn tile_rays(tr: &Tracer<'_>, opts: &RenderOptions, spec: &TileSpec<'_>) -> Tile
         .enumerate()
         .map(|(k, r)| {
             let on = spec.mask.is_none_or(|m| m[k]);
-            let slab = if on { r.slab(&tr.bounds) } else { None };
+            let slab = if on { r.slab(&tr.ctx.bounds) } else { None };
             let floor = spec.floors.map_or(0.0, |f| f[k].at);
             // A floor at or past the clip end leaves nothing to trace.
             slab.and_then(|(t0, t1)| (floor < t1).then_some((t0.max(floor), t1)))
@@ -436,6 +417,7 @@ fn tile_rays(tr: &Tracer<'_>, opts: &RenderOptions, spec: &TileSpec<'_>) -> Tile
         hits: vec![None; n],
         class: vec![Class::Outside; n],
         included: Vec::new(),
+        refine: RefineScratch::default(),
     }
 }
 
@@ -443,34 +425,16 @@ fn tile_rays(tr: &Tracer<'_>, opts: &RenderOptions, spec: &TileSpec<'_>) -> Tile
 /// centres over their clipped T ranges), and the interior ends of its
 /// slices.
 fn prune_to_tile(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     tile: &TileRays,
     th: u32,
     st: &mut TileState,
-) -> Option<(PrunedEvals, Vec<f64>)> {
+) -> Option<(EvalSet, Vec<f64>)> {
     let xs = (f64::from(tile.x0) + 0.5, f64::from(tile.x0 + tile.w) - 0.5);
     let ys = (f64::from(tile.y0) + 0.5, f64::from(tile.y0 + th) - 0.5);
-    let t = tile_depths(tr, tile)?;
+    let t = tile.depths(tr)?;
     let pruned = tr.pruned_to_beam(xs, ys, t, st)?;
     Some((pruned, tr.slice_ends(xs, ys, t)))
-}
-
-/// The range of the ray parameter a tile's pixels are traced over: the
-/// hull of their slab ranges, or, in a tile that holds none (see
-/// `tile_rays`), the range of its beam inside the bounds, which holds
-/// them all; `None` when no pixel's ray meets the bounds.
-pub(crate) fn tile_depths(tr: &Tracer<'_>, tile: &TileRays) -> Option<Interval> {
-    if tile.slabs.is_empty() {
-        let xs = (f64::from(tile.x0) + 0.5, f64::from(tile.x0 + tile.w) - 0.5);
-        let ys = (f64::from(tile.y0) + 0.5, f64::from(tile.y0 + tile.h) - 0.5);
-        return tr.cam.corners(xs, ys).slab_range(&tr.bounds);
-    }
-    let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
-    for &(a, c) in tile.slabs.iter().flatten() {
-        t0 = t0.min(a);
-        t1 = t1.max(c);
-    }
-    (t0 <= t1).then(|| Interval::new(t0, t1))
 }
 
 /// Side of the squares of IAA's base render over which shadow beams are
@@ -496,12 +460,12 @@ pub(crate) fn squares(w: u32, h: u32, side: u32) -> impl Iterator<Item = Rect> {
 // Traces every pixel with a range left as one guaranteed ray from its
 // floor (`floors`, None: its clip start).
 fn rays_from_floors(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     tile: &mut TileRays,
     floors: Option<&[Floor]>,
     st: &mut TileState,
 ) {
-    let all: Vec<u32> = (0..tr.evals.len() as u32).collect();
+    let all: Vec<u32> = (0..tr.ctx.evals.len() as u32).collect();
     for k in 0..tile.slabs.len() {
         let Some(range) = tile.slabs[k] else {
             tile.class[k] = Class::Outside;
@@ -513,13 +477,13 @@ fn rays_from_floors(
 }
 
 // Finds every pixel's first hit with `method`.
-fn visibility(tr: &Tracer<'_>, method: Method, tile: &mut TileRays, th: u32, st: &mut TileState) {
+fn visibility(tr: &Scope<'_>, method: Method, tile: &mut TileRays, th: u32, st: &mut TileState) {
     let n = tile.slabs.len();
     match method {
-        Method::Beam if tr.flat => plane::trace_tile(tr, tile, th, st),
+        Method::Beam if tr.ctx.flat => plane::trace_tile(tr, tile, th, st),
         Method::Beam => beam::trace_tile(tr, tile, th, st),
         Method::Pixel | Method::Point { .. } => {
-            let all: Vec<u32> = (0..tr.evals.len() as u32).collect();
+            let all: Vec<u32> = (0..tr.ctx.evals.len() as u32).collect();
             for k in 0..n {
                 if let Some((a, b)) = tile.slabs[k] {
                     let r = tile.rays[k];
@@ -546,17 +510,17 @@ fn visibility(tr: &Tracer<'_>, method: Method, tile: &mut TileRays, th: u32, st:
 // `known` (row-major; empty: none is) stay out of the beams: shading
 // never reads the beams' answer for them.
 fn shadow_beams(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     tile: &TileRays,
     surfs: &TileSurfs,
     known: &[Option<u64>],
     ts: &mut TileState,
 ) -> Vec<bool> {
     let t_shadow = Instant::now();
-    let nl = tr.lights.len();
+    let nl = tr.ctx.lights.len();
     let mut lit_by_beam = vec![false; surfs.len() * nl];
     for b in &tile.included {
-        for (li, light) in tr.lights.iter().enumerate() {
+        for (li, light) in tr.ctx.lights.iter().enumerate() {
             if !light.shadows {
                 continue;
             }
@@ -614,19 +578,20 @@ struct CutFaces {
 
 impl CutFaces {
     // The tile's cut faces, where they share their object's colour.
-    fn of(tr: &Tracer<'_>, tile: &TileRays) -> Option<CutFaces> {
+    fn of(tr: &Scope<'_>, tile: &TileRays) -> Option<CutFaces> {
         let uniform = tile.grid.shared_direction().is_some()
             && tr
+                .ctx
                 .lights
                 .iter()
                 .all(|l| !l.shadows && matches!(l.kind, LightKind::Directional(_)));
         uniform.then(|| CutFaces {
-            shaded: vec![None; tr.evals.len()],
+            shaded: vec![None; tr.ctx.evals.len()],
         })
     }
 
     // Lights every cut face of the tile in `lit`.
-    fn paint(mut self, tr: &Tracer<'_>, tile: &TileRays, lit: &mut Lit, st: &mut TileState) {
+    fn paint(mut self, tr: &Scope<'_>, tile: &TileRays, lit: &mut Lit, st: &mut TileState) {
         for (k, h) in tile.hits.iter().enumerate() {
             let Some(h) = h.filter(|h| h.inside) else {
                 continue;
@@ -649,7 +614,7 @@ impl CutFaces {
 // Lights every hit (the background elsewhere), with per-pixel shadow
 // segments for the lights no shadow beam settled.
 fn shade_pixels(
-    tr: &Tracer<'_>,
+    tr: &Scope<'_>,
     surfs: &TileSurfs,
     (lit_by_beam, known): (&[bool], &[Option<u64>]),
     background: [f64; 3],
@@ -657,14 +622,14 @@ fn shade_pixels(
     ts: &mut TileState,
 ) -> Lit {
     let t_shade = Instant::now();
-    let (n, nl) = (surfs.len(), tr.lights.len());
+    let (n, nl) = (surfs.len(), tr.ctx.lights.len());
     let mut linear = vec![background; n];
     let mut shadowed = vec![0u64; n];
     let mut normals = opts.want_normals.then(|| vec![[f64::NAN; 3]; n]);
     let mut shadow_ms = 0.0;
     // Reading the clock twice per pixel costs more than shading a pixel
     // without shadows: only pixels with shadow segments to trace are timed.
-    let any_shadows = tr.lights.iter().any(|l| l.shadows);
+    let any_shadows = tr.ctx.lights.iter().any(|l| l.shadows);
     // Per light, where the last shadowed sample's segment met a solid
     // (see `shadow::point_segment_free`).
     let mut blockers = vec![None; nl];
@@ -712,7 +677,7 @@ fn class_color(c: Class) -> Rgb<u8> {
 mod tests {
     use super::*;
     use crate::eval::build::{EvalKind, build_evaluators};
-    use crate::render::camera::RayCamera;
+    use crate::render::view::camera::RayCamera;
     use crate::scene::{Bounds, Camera, Light, Object, Projection, RenderSettings, Scene};
 
     // Two discs of a 2D model, left and right of x = 0, in two colours,
@@ -767,17 +732,17 @@ mod tests {
         let scene = two_discs();
         let evals = build_evaluators(&scene, EvalKind::Interp).expect("evaluators");
         let size = 48;
-        let tr = Tracer::new(
+        let tr = Scope::new(
             &scene,
             &evals,
             RayCamera::new(&scene.camera, size, size).unwrap(),
             true,
         );
-        assert!(tr.flat);
+        assert!(tr.ctx.flat);
         let mut opts = RenderOptions::new(size, size);
         opts.want_normals = true;
         let out = render_tile(&tr, &opts, spec_of(size), [0.0; 3]);
-        let grid = RayGrid::new(&tr.cam, (0, 0), (size, size));
+        let grid = RayGrid::new(&tr.ctx.cam, (0, 0), (size, size));
         let normals = out.normals.as_ref().expect("normals asked for");
         let mut hits = [0; 2];
         for (k, &t) in out.depth.iter().enumerate() {
@@ -845,7 +810,7 @@ mod tests {
         };
         let evals = build_evaluators(&scene, EvalKind::Interp).expect("evaluators");
         let size = 32;
-        let tr = Tracer::new(
+        let tr = Scope::new(
             &scene,
             &evals,
             RayCamera::new(&scene.camera, size, size).unwrap(),

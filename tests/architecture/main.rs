@@ -5,6 +5,9 @@
 //! `$crate::X`, grouped `crate::{X, Y::z}`, and `super::` chains that climb
 //! to the crate root. The dependency graph found must also have no cycle.
 
+mod layers;
+mod lengths;
+
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
