@@ -4,49 +4,16 @@
 //! point and interval rules of the transcendentals through shims, and runs
 //! the very same derivative rules over CLIF values.
 //!
-//! # Derivative rules
-//! [`grad_unary`], [`grad_binary`] and [`grad_powi`] are written once,
-//! generic over [`Arith`], the arithmetic of one kind of number: the
-//! interpreter implements it over f64 and [`Interval`], the JIT over the
-//! CLIF values of a point and of a packed interval. Where the two backends'
-//! results differ today in their bits (the kink of `abs`, NaN operands of
-//! min and max, the atan2 branch cut, how `sqrt`, `ln`, `pow` and
-//! `powi(_, 1)` round, exact zeros at run time), [`Arith`] has one method
-//! per difference, saying why; the tests compare the JIT with the
-//! interpreter within those. Each rule is the chain rule `f'(a)·da`, with
-//! these conventions (the interpreter's; see [`Arith`] for the JIT's):
-//! - A partial that is exactly 0 stays 0 ([`Arith::keep_zero`]): a value that does not
-//!   depend on a variable contributes nothing to its partial even where
-//!   `f'(a)` is infinite (sqrt at 0, ln at 0). Intervals get the same effect
-//!   from [`Interval::mul`], which drops the 0·inf products.
-//! - `abs` at 0: point derivative `sign(a)·da` with sign(0) = 0; interval
-//!   `[-1, 1]·da` when 0 is inside the operand, `[0, 1]·da` (`[-1, 0]·da`)
-//!   when 0 is its lower (upper) end.
-//! - `min`/`max`: the derivative of the operand the point op returns (on a
-//!   tie, the second operand, as [`min_nan`] and [`max_nan`] return it);
-//!   interval: that operand's derivative when the operand intervals are
-//!   ordered strictly, else the hull of both.
-//! - `sqrt` at 0: `f'(0) = +inf`, so the partial is ±inf (or 0 by the rule
-//!   above). `ln` at 0 likewise; `ln` and `sqrt` of a negative, and `a / 0`,
-//!   give NaN or ±inf as IEEE arithmetic does.
-//! - `pow(a, b)`: `b·a^(b-1)·da + a^b·ln(a)·db`, the second term 0 where
-//!   `a^b = 0` (0^b for b > 0 is 0 for every b nearby). NaN for a < 0.
-//! - `powi(a, n)`: `n·a^(n-1)·da`; 0 for n = 0.
+//! - [`grad_unary`], [`grad_binary`] and [`grad_powi`]: the chain rule,
+//!   written once, generic over [`Arith`] (f64 and [`Interval`] here, CLIF
+//!   values in the JIT; [`Arith`] has one method per place where the two
+//!   backends' bits differ, saying why);
+//! - the interval rules drop the points where an op is undefined, and
+//!   EMPTY means undefined on the whole box: no real root is ever missed.
 //!
-//! # Partial domains
-//! The interval of every op covers the op's point values at every point of
-//! its operand box where those are real; points where an op is undefined
-//! (sqrt or ln of a negative, division by 0, pow of a negative base) are
-//! simply dropped, so `sqrt([-1, 4]) = [0, 2]`. EMPTY means the op is
-//! undefined on the whole box; it propagates through every later op (except
-//! `powi(_, 0)`, which is 1 everywhere, NaN included). For the tracer this is
-//! the right reading: if `F(box)` is EMPTY, f is undefined at every point of
-//! the box, so the box holds no root; if `F(box)` is not EMPTY and excludes
-//! 0, f has no real zero in the box. No root of the real function f (a
-//! point where every op is defined and f = 0) is ever missed, because every
-//! op's interval contains every real value of that op on the box. Interval
-//! gradients follow the same rule over the defined part (the ln derivative
-//! `1/a` over the non-negative part of `a`, and so on).
+//! `docs/semantics.md` states the derivative conventions (zeros that stay
+//! zero, `abs` at 0, ties of `min`/`max`, `sqrt` and `ln` at 0, `pow`) and
+//! the partial-domain rule in full.
 
 use super::{BinaryOp, Op, UnaryOp};
 use crate::interval::{Interval, max_nan, min_nan, powi_point, rem_euclid, sign};

@@ -26,6 +26,9 @@ use crate::render::view::output;
 use crate::render::{MAX_SIZE, RenderError, RenderOptions, RenderOutput, TILE};
 use crate::scene::Scene;
 
+mod iaa;
+use iaa::{anti_alias, edges_of};
+
 /// Renders `scene` with one evaluator per object (same order):
 /// `evaluators[i]` evaluates `scene.objects[i].function` (the renderer
 /// reads the functions only to see which of x, y, z they use).
@@ -529,132 +532,6 @@ fn tile_row(w: u32, h: u32, y0: u32) -> Vec<(u32, u32, u32, u32)> {
         .collect()
 }
 
-// The base samples along a tile's sides, before its anti-aliasing.
-fn edges_of(t: &TileOut) -> TileEdges {
-    TileEdges::new(t.w, t.h, &t.depth, &t.shadowed)
-}
-
-// Applies IAA to a tile traced by `Frame::trace_classified` (or, for the
-// other modes, counts its samples): the shadow-edge rule over its base
-// samples (`beside`: those around the tile), then the split pixels'
-// sub-samples traced with beams on `fine`'s images, square by square
-// (`trace_split`), each at its pixel's level (`aa::Sampling`).
-fn anti_alias(
-    tr: &Scope<'_>,
-    fine: Option<&Fine<'_>>,
-    opts: &RenderOptions,
-    aa: Aa,
-    t: &mut TileOut,
-    beside: Beside<'_>,
-    bg: [f64; 3],
-) {
-    let (Aa::Iaa { depth, .. }, Some(fine)) = (aa, fine) else {
-        let n = u64::from(t.w * t.h);
-        let per = u64::from(aa.grid_factor()).pow(2);
-        let st = &mut t.state.stats;
-        st.aa_samples += n * per;
-        st.aa_samples_max = st.aa_samples_max.max(per);
-        if per > 1 {
-            st.aa_pixels_split += n;
-        }
-        return;
-    };
-    let t0 = Instant::now();
-    // The sub-samples carry on with the tile's own state.
-    let mut st = std::mem::take(&mut t.state);
-    let mut px = aa::TilePixels {
-        linear: &mut t.linear,
-        depth: &mut t.depth,
-        coverage: &mut t.coverage,
-        samples: &mut t.samples,
-        shadowed: &t.shadowed,
-    };
-    // Traced by `Frame::trace_classified`, which always classifies.
-    let Some(mut c) = t.classified.take() else {
-        unreachable!("an IAA tile is classified when traced")
-    };
-    let edge = aa::shadow_edges((t.w, t.h), px.depth, px.shadowed, beside);
-    c.mark_shadow_edges(edge, &mut st.stats);
-    let area = (t.x0, t.y0, t.w, t.h);
-    // Each split pixel is sampled at its own level (see `aa::Sampling`):
-    // the pixels of one level are traced together on that level's image.
-    let n = c.sampling.len();
-    let level: Vec<u32> = c.sampling.iter().map(|s| s.level(depth)).collect();
-    let split: Vec<bool> = c.sampling.iter().map(|s| s.is_split()).collect();
-    // Off shadow edges, sub-samples near their pixel's base hit take its
-    // shadow state (see `aa::SHADOW_REUSE_REACH`).
-    let hints: Vec<ShadowHint> = (0..n)
-        .map(|k| {
-            let t = px.depth[k];
-            ShadowHint {
-                t: if c.edge[k] { f64::NAN } else { t },
-                reach: if t.is_finite() {
-                    aa::SHADOW_REUSE_REACH * tr.ctx.cam.spacing(t)
-                } else {
-                    0.0
-                },
-                shadowed: px.shadowed[k],
-            }
-        })
-        .collect();
-    let mut sub: Option<SplitSamples> = None;
-    for l in (1..=depth).rev() {
-        let Some(fine_tr) = fine.at(l) else { continue };
-        let these: Vec<bool> = level.iter().map(|&lk| lk == l).collect();
-        if !these.iter().any(|&s| s) {
-            continue;
-        }
-        let known = (c.floors.as_slice(), hints.as_slice(), c.brackets.as_slice());
-        let (lin, cov, dep) = trace_split(
-            fine_tr,
-            opts,
-            area,
-            (&these, known),
-            1 << l,
-            bg,
-            &mut st.stats,
-        );
-        let all =
-            sub.get_or_insert_with(|| (vec![[0.0; 3]; n], vec![0.0; n], vec![f64::INFINITY; n]));
-        for k in (0..n).filter(|&k| these[k]) {
-            (all.0[k], all.1[k], all.2[k]) = (lin[k], cov[k], dep[k]);
-        }
-    }
-    let per: Vec<u32> = level.iter().map(|&l| 1 << (2 * l)).collect();
-    aa::merge_split(
-        &mut px,
-        &split,
-        sub.as_ref().map(|(l, c, d)| (&l[..], &c[..], &d[..])),
-        &per,
-        &mut st.stats,
-    );
-    st.stats.aa_cpu_ms += ms_since(t0);
-    t.state = st;
-}
-
 #[cfg(test)]
-mod tests {
-    use crate::render::frame::span_union;
-    use std::time::{Duration, Instant};
-
-    // Compilations on several threads at once count once, and only inside
-    // the render: the time subtracted never exceeds the render's own.
-    #[test]
-    fn waits_count_their_union_inside_the_render() {
-        let t0 = Instant::now();
-        let at = |ms: u64| t0 + Duration::from_millis(ms);
-        let span = |a: u64, b: u64| (at(a), at(b));
-        let render = span(10, 100);
-        let union = |s: &[(Instant, Instant)]| span_union(s.iter().copied(), render);
-        assert_eq!(union(&[]), Duration::ZERO);
-        // Two threads compiling at once, and one span half before the render.
-        let overlapping = [span(20, 60), span(30, 70), span(0, 15)];
-        assert_eq!(union(&overlapping), Duration::from_millis(55));
-        // Disjoint spans add; one past the render's end is cut there.
-        let disjoint = [span(20, 30), span(40, 50), span(95, 200)];
-        assert_eq!(union(&disjoint), Duration::from_millis(25));
-        // Sixteen threads each waiting the whole render: the render itself.
-        let all = vec![span(0, 500); 16];
-        assert_eq!(union(&all), Duration::from_millis(90));
-    }
-}
+#[path = "frame_tests.rs"]
+mod tests;

@@ -9,3 +9,4 @@ pub mod ray;
 pub(crate) mod refine;
 #[cfg(test)]
 mod signs_tests;
+pub(crate) mod tile_rays;

@@ -5,3 +5,4 @@
 pub mod camera;
 pub mod fit;
 pub mod output;
+pub mod pixel_ray;

@@ -1,0 +1,178 @@
+//! The tile's hits lit: shadow beams over included blocks, then each
+//! pixel shaded, with cut faces and singular normals handled.
+
+use super::*;
+
+// Shadow beams over the included blocks: row-major per pixel and light,
+// whether one beam proved the pixel lit. Pixels whose shadow state is
+// `known` (row-major; empty: none is) stay out of the beams: shading
+// never reads the beams' answer for them.
+pub(super) fn shadow_beams(
+    tr: &Scope<'_>,
+    tile: &TileRays,
+    surfs: &TileSurfs,
+    known: &[Option<u64>],
+    ts: &mut TileState,
+) -> Vec<bool> {
+    let t_shadow = Instant::now();
+    let nl = tr.ctx.lights.len();
+    let mut lit_by_beam = vec![false; surfs.len() * nl];
+    for b in &tile.included {
+        for (li, light) in tr.ctx.lights.iter().enumerate() {
+            if !light.shadows {
+                continue;
+            }
+            let mut members = Vec::new();
+            let mut pts = Vec::new();
+            for (i, j) in b.pixels() {
+                let k = (j * tile.w + i) as usize;
+                let Some(&s) = surfs.get(k) else { continue };
+                if known.get(k).is_some_and(Option::is_some) {
+                    continue;
+                }
+                let facing =
+                    shadow::light_dir(tr, light.kind, s.p).is_some_and(|(l, _)| s.n.dot(l) > 0.0);
+                if facing {
+                    members.push(k);
+                    pts.push(s);
+                }
+            }
+            if members.len() < 2 {
+                continue;
+            }
+            ts.stats.shadow_beams += 1;
+            if shadow::shadow_beam(tr, &pts, light.kind, ts) {
+                ts.stats.shadow_beams_ok += 1;
+                ts.stats.shadow_rays_saved += members.len() as u64;
+                for k in members {
+                    lit_by_beam[k * nl + li] = true;
+                }
+            }
+        }
+    }
+    ts.stats.shadow_cpu_ms += ms_since(t_shadow);
+    lit_by_beam
+}
+
+// The shaded pixels of a tile.
+pub(super) struct Lit {
+    pub(super) linear: Vec<[f64; 3]>,
+    pub(super) shadowed: Vec<u64>,
+    pub(super) normals: Option<Vec<[f64; 3]>>,
+}
+
+/// The cut faces of a tile (hits where a ray starts inside a solid, at the
+/// bounds: every hit of a flat scene), lit once per object where every
+/// pixel's ray has the same direction and every light is directional and
+/// casts no shadow. A cut face's normal faces the viewer along the ray
+/// (`shade::surface`), so its colour then depends on the object alone:
+/// the one `shade::shade` gives its first pixel is every pixel's, bit for
+/// bit. Shading each of them was a tenth of prospero's render.
+pub(super) struct CutFaces {
+    // Per object: the colour and shadow bits of its cut faces, and their
+    // normal, once its first cut face in the tile is shaded.
+    pub(super) shaded: Vec<Option<(DVec3, u64, DVec3)>>,
+}
+
+impl CutFaces {
+    // The tile's cut faces, where they share their object's colour.
+    pub(super) fn of(tr: &Scope<'_>, tile: &TileRays) -> Option<CutFaces> {
+        let uniform = tile.grid.shared_direction().is_some()
+            && tr
+                .ctx
+                .lights
+                .iter()
+                .all(|l| !l.shadows && matches!(l.kind, LightKind::Directional(_)));
+        uniform.then(|| CutFaces {
+            shaded: vec![None; tr.ctx.evals.len()],
+        })
+    }
+
+    // Lights every cut face of the tile in `lit`.
+    pub(super) fn paint(
+        mut self,
+        tr: &Scope<'_>,
+        tile: &TileRays,
+        lit: &mut Lit,
+        st: &mut TileState,
+    ) {
+        for (k, h) in tile.hits.iter().enumerate() {
+            let Some(h) = h.filter(|h| h.inside) else {
+                continue;
+            };
+            let (c, shadowed, n) = *self.shaded[h.obj].get_or_insert_with(|| {
+                let s = shade::surface(tr, &tile.ray(k), &h, &mut st.stats);
+                let memo = &mut shade::LightMemo::default();
+                let (c, shadowed) = shade::shade(tr, &s, (&[], None), (&mut [], memo), st);
+                (c, shadowed, s.n)
+            });
+            lit.linear[k] = c.to_array();
+            lit.shadowed[k] = shadowed;
+            if let Some(nv) = lit.normals.as_mut() {
+                nv[k] = n.to_array();
+            }
+        }
+    }
+}
+
+// Lights every hit (the background elsewhere), with per-pixel shadow
+// segments for the lights no shadow beam settled.
+pub(super) fn shade_pixels(
+    tr: &Scope<'_>,
+    surfs: &TileSurfs,
+    (lit_by_beam, known): (&[bool], &[Option<u64>]),
+    background: [f64; 3],
+    opts: &RenderOptions,
+    ts: &mut TileState,
+) -> Lit {
+    let t_shade = Instant::now();
+    let (n, nl) = (surfs.len(), tr.ctx.lights.len());
+    let mut linear = vec![background; n];
+    let mut shadowed = vec![0u64; n];
+    let mut normals = opts.want_normals.then(|| vec![[f64::NAN; 3]; n]);
+    let mut shadow_ms = 0.0;
+    // Reading the clock twice per pixel costs more than shading a pixel
+    // without shadows: only pixels with shadow segments to trace are timed.
+    let any_shadows = tr.ctx.lights.iter().any(|l| l.shadows);
+    // Per light, where the last shadowed sample's segment met a solid
+    // (see `shadow::point_segment_free`).
+    let mut blockers = vec![None; nl];
+    let mut memo = shade::LightMemo::default();
+    for (k, s) in surfs.iter() {
+        let t0 = any_shadows.then(Instant::now);
+        let (c, sh) = shade::shade(
+            tr,
+            s,
+            (
+                &lit_by_beam[k * nl..(k + 1) * nl],
+                known.get(k).copied().flatten(),
+            ),
+            (&mut blockers, &mut memo),
+            ts,
+        );
+        shadow_ms += t0.map_or(0.0, ms_since);
+        linear[k] = c.to_array();
+        shadowed[k] = sh;
+        if let Some(nv) = normals.as_mut() {
+            nv[k] = s.n.to_array();
+        }
+    }
+    // Per-pixel lighting time is dominated by shadow segments.
+    ts.stats.shadow_cpu_ms += shadow_ms;
+    ts.stats.shade_cpu_ms += (ms_since(t_shade) - shadow_ms).max(0.0);
+    Lit {
+        linear,
+        shadowed,
+        normals,
+    }
+}
+
+/// The classification map's colour of a pixel.
+pub(super) fn class_color(c: Class) -> Rgb<u8> {
+    match c {
+        Class::Outside => Rgb([0, 0, 0]),
+        Class::Background => Rgb([30, 50, 140]),
+        Class::Included => Rgb([40, 180, 70]),
+        Class::Ray => Rgb([210, 60, 40]),
+    }
+}
