@@ -138,6 +138,8 @@ fn sample_inputs(scene: &Scene) -> (Vec<[f64; 3]>, Vec<[Interval; 3]>) {
     (points, boxes)
 }
 
+// long-fn: one table, every evaluator kind measured in turn on the same
+// points and boxes; each row is a few lines of the same shape.
 fn bench_eval(args: &EvalArgs) -> Result<(), CliError> {
     let files = if args.files.is_empty() {
         default_eval_files()

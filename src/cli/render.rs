@@ -117,6 +117,8 @@ pub fn run(args: &Args) -> Result<(), CliError> {
 /// Runs `ibeam render` on the scene `load` gives for `args.file` (called
 /// once the outputs are known to be writable); `ibeam watch` loads the
 /// scene itself, to learn the files it imports.
+// long-fn: the order of a render's steps as a user sees them (check the
+// outputs, load, build, render, write, report); each is a call.
 pub fn run_with(
     args: &Args,
     load: impl FnOnce(&Path) -> Result<ibeam::scene::Scene, CliError>,

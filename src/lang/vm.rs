@@ -152,6 +152,7 @@ pub fn parse_vm(text: &str, src: usize) -> Result<Function, Diag> {
 
 /// Emits the op of one line's words `w` (at least one), whose operands
 /// `ids` defines.
+// long-fn: one match arm per `.vm` opcode, as the format lists them.
 fn parse_line(
     b: &mut Builder,
     ids: &HashMap<&str, (ValueId, usize)>,

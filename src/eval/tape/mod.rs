@@ -442,6 +442,8 @@ impl Tape {
     /// from the end. Only the kept ops are visited: a pruned child keeps a
     /// small part of its parent (a tenth on a union of 1000 spheres), and
     /// passes over every parent op were most of this function's time.
+    // long-fn: one backward pass with register assignment inline; split,
+    // the hot loop would pass its state through calls (see the doc).
     fn write_child(
         parent: &Function,
         keep: Keep,

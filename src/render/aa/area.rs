@@ -69,6 +69,8 @@ impl Ctx<'_, '_> {
     // The beam tests of the block `b` (whole area), inside
     // a parent cell whose beam was included in `inherited` if that is
     // Some; the covered test too where `cover` asks for it.
+    // long-fn: the pixel-area tests in the order they run (reject, include,
+    // colour, cover), each reading the previous one's bracket.
     pub(super) fn test(
         &self,
         b: Rect,
@@ -104,7 +106,7 @@ impl Ctx<'_, '_> {
         };
         let rejected = |t: Interval| eval_min(t, st).is_none_or(|f| f.positive());
         let near = floor.near_from(t0);
-        let (ta, tb) = match probe::sweep(tr.sweep_mode(t0, near, t1), t0, t1, min_w, rejected) {
+        let (ta, tb) = match probe::sweep(tr, probe::SweepRange { t0, near, t1 }, min_w, rejected) {
             Sweep::Empty => return decide(Cell::Background, floor),
             // Constant along the rays: no bracket to include.
             Sweep::Flat => return decide(Cell::Split, floor),

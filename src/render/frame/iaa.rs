@@ -13,6 +13,8 @@ pub(super) fn edges_of(t: &TileOut) -> TileEdges {
 // samples (`beside`: those around the tile), then the split pixels'
 // sub-samples traced with beams on `fine`'s images, square by square
 // (`trace_split`), each at its pixel's level (`aa::Sampling`).
+// long-fn: the IAA pass over one tile in its order (shadow edges, then
+// each level's split pixels, then the merge), over one tile's buffers.
 pub(super) fn anti_alias(
     tr: &Scope<'_>,
     fine: Option<&Fine<'_>>,

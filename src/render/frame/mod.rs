@@ -224,6 +224,8 @@ impl<'a> Frame<'a> {
     /// `output_ms` includes the time spent in `sink`. Stops at the first
     /// error of `sink`, or once the cancel flag is set
     /// ([`Frame::with_cancel`]).
+    // long-fn: the row-by-row pipeline (trace a row ahead, anti-alias,
+    // band, hand to the sink) shares one scope of borrows across rows.
     pub fn stream<E: Send + From<RenderError>>(
         self,
         mut sink: impl FnMut(&Band) -> Result<(), E> + Send,

@@ -50,6 +50,7 @@ use crate::render::context::stats::RenderStats;
 use crate::render::enclose::proof;
 use crate::render::prune::cells::{self, CellTapes};
 use crate::render::prune::scope::Scope;
+use crate::render::trace::sweep::{self, Search, SweepState, Visit};
 use crate::render::prune::scope::TileState;
 use crate::render::view::camera::{bounds_box, normalize};
 use crate::scene::LightKind;
@@ -210,8 +211,7 @@ fn sweep_segments(
         min_w,
         bounds: bounds_box(&tr.ctx.bounds),
     };
-    let mut sweep = Sweep {
-        pieces: 0,
+    let mut sw = SegmentSweep {
         front: Front::Starts,
         starts_outside: Vec::new(),
         blocked_at: None,
@@ -241,8 +241,13 @@ fn sweep_segments(
         0
     };
     let pieces = crate::render::prune::scope::equal_pieces(0.0, 1.0, 1 << levels);
-    let free = seg.free(tr, pieces, f64::INFINITY, &mut sweep, st);
-    (free, sweep.blocked_at)
+    let mut search = FreeSearch {
+        seg: &seg,
+        sw: &mut sw,
+        st,
+    };
+    let free = sweep::sweep(tr, pieces, &mut search, &mut SweepState::new()).is_none();
+    (free, sw.blocked_at)
 }
 
 // The segments from the points of `q` along `delta` (`len` long at most),
@@ -257,9 +262,8 @@ struct Segments<'s> {
     bounds: IBox,
 }
 
-// The state of one front-to-back sweep, across nested calls.
-struct Sweep {
-    pieces: usize,
+// What one sweep of a segment proves as it goes, across nested sweeps.
+struct SegmentSweep {
     // What is proven at the start of the next piece (pieces are settled
     // front to back and contiguously).
     front: Front,
@@ -268,6 +272,68 @@ struct Sweep {
     starts_outside: Vec<Option<bool>>,
     // Where along the segments a point inside a solid was found.
     blocked_at: Option<f64>,
+}
+
+// The search over a shadow segment's pieces on the sweep driver
+// (`trace::sweep`), which finds whether it is blocked. A piece
+// `SEGMENT_CELL_RATIO` times narrower than the one the evaluators were
+// last specialised to is swept, with its sub-pieces, on the evaluators of
+// the smallest cell holding it. Pruning keeps signs, and a piece's
+// proofs read signs only (a pruned function positive at a start and
+// increasing has the whole function's sign, positive, on the piece), so
+// the nesting changes the cost of the evaluations and the tightness of
+// their intervals, not the order in which pieces are visited. Every
+// branch reads or sets `front`, which holds only because the driver pops
+// pieces in order.
+struct FreeSearch<'a, 's> {
+    seg: &'a Segments<'s>,
+    sw: &'a mut SegmentSweep,
+    st: &'a mut TileState,
+}
+
+impl Search for FreeSearch<'_, '_> {
+    // Found: the segments are blocked.
+    type Found = ();
+
+    fn visit(&mut self, tr: &Scope<'_>, (a, c): sweep::Piece, at: &mut SweepState) -> Visit<()> {
+        if at.pieces > MAX_SHADOW_PIECES {
+            return Visit::Stop(());
+        }
+        let seg = self.seg;
+        let s = Interval::new(a, c);
+        let bx: IBox = std::array::from_fn(|i| seg.q[i].add(s.mul(seg.delta[i])));
+        let Some(clip) = box_meet(bx, seg.bounds) else {
+            // Wholly outside the bounds: no surface, but nothing known of f.
+            self.sw.front = Front::Unknown;
+            return Visit::Drop;
+        };
+        if tr.pruner.enabled && tr.ctx.large && (c - a) * SEGMENT_CELL_RATIO <= at.specialised_width {
+            if let Some(set) = CellTapes::holding(tr, &clip, self.st) {
+                return Visit::Specialise(set);
+            }
+            // A piece that no cell holds looks again when pieces are
+            // narrower by the same ratio.
+            at.specialised_width = c - a;
+        }
+        let maybe: Vec<usize> = (0..tr.ctx.evals.len())
+            .filter(|&k| !proof::holds_no_surface(tr.ctx.interval(k, clip, &mut self.st.stats)))
+            .collect();
+        if maybe.is_empty() {
+            self.sw.front = Front::Unknown;
+            return Visit::Drop;
+        }
+        match seg.piece(tr, (a, c), bx, &maybe, self.sw, &mut self.st.stats) {
+            Piece::Blocked => Visit::Stop(()),
+            // Positive at its start and increasing over its whole box
+            // (not only the part inside the bounds): positive at its end.
+            Piece::Increasing => {
+                self.sw.front = Front::Outside;
+                Visit::Drop
+            }
+            Piece::Open if (c - a) * seg.len <= seg.resolution(a) => Visit::Stop(()),
+            Piece::Open => Visit::Halve,
+        }
+    }
 }
 
 // What is proven of the objects at the start of the next piece.
@@ -284,80 +350,6 @@ enum Front {
 }
 
 impl Segments<'_> {
-    // The front-to-back bisection over the pieces on `stack` (nearest
-    // last), with `tr`'s functions those of the cell holding a piece
-    // `scope` wide (infinite: the whole functions); whether every piece is
-    // free. A piece `SEGMENT_CELL_RATIO` times narrower than `scope` is
-    // swept, with its sub-pieces, by a nested call on the evaluators of
-    // the smallest cell holding it. Pruning keeps signs, and a piece's
-    // proofs read signs only (a pruned function positive at a start and
-    // increasing has the whole function's sign, positive, on the piece),
-    // so the nesting changes the cost of the evaluations and the
-    // tightness of their intervals, not the order in which pieces are
-    // visited.
-    // One front-to-back loop: every branch reads or sets `front`, which
-    // holds only because pieces are popped in order, so the loop stays whole.
-    fn free(
-        &self,
-        tr: &Scope<'_>,
-        mut stack: Vec<(f64, f64)>,
-        mut scope: f64,
-        sw: &mut Sweep,
-        st: &mut TileState,
-    ) -> bool {
-        let n = tr.ctx.evals.len();
-        while let Some((a, c)) = stack.pop() {
-            sw.pieces += 1;
-            if sw.pieces > MAX_SHADOW_PIECES {
-                return false;
-            }
-            let s = Interval::new(a, c);
-            let bx: IBox = std::array::from_fn(|i| self.q[i].add(s.mul(self.delta[i])));
-            let Some(clip) = box_meet(bx, self.bounds) else {
-                // Wholly outside the bounds: no surface, but nothing known of f.
-                sw.front = Front::Unknown;
-                continue;
-            };
-            // A piece narrower than the current cell's by the ratio is
-            // swept, with its sub-pieces, on its own cell's evaluators.
-            if tr.pruner.enabled && tr.ctx.large && (c - a) * SEGMENT_CELL_RATIO <= scope {
-                if let Some(set) = CellTapes::holding(tr, &clip, st) {
-                    let local = tr.with_evals(&set);
-                    if !self.free(&local, vec![(a, c)], c - a, sw, st) {
-                        return false;
-                    }
-                    continue;
-                }
-                // A piece that no cell holds looks again when pieces are
-                // narrower by the same ratio.
-                scope = c - a;
-            }
-            let mut maybe: Vec<usize> = Vec::new();
-            for k in 0..n {
-                if !proof::holds_no_surface(tr.ctx.interval(k, clip, &mut st.stats)) {
-                    maybe.push(k);
-                }
-            }
-            if maybe.is_empty() {
-                sw.front = Front::Unknown;
-                continue;
-            }
-            match self.piece(tr, (a, c), bx, &maybe, sw, &mut st.stats) {
-                Piece::Blocked => return false,
-                // Positive at its start and increasing over its whole box
-                // (not only the part inside the bounds): positive at its end.
-                Piece::Increasing => sw.front = Front::Outside,
-                Piece::Open if (c - a) * self.len <= self.resolution(a) => return false,
-                Piece::Open => {
-                    let m = 0.5 * (a + c);
-                    stack.push((m, c));
-                    stack.push((a, m));
-                }
-            }
-        }
-        true
-    }
-
     // The shortest piece the sweep halves at `a` (a fraction of the
     // segment): `min_w`, but 16 times shorter within twice `min_w` of the
     // start. The segment starts within the refinement tolerance of the
@@ -381,7 +373,7 @@ impl Segments<'_> {
         (a, c): (f64, f64),
         bx: IBox,
         maybe: &[usize],
-        sw: &mut Sweep,
+        sw: &mut SegmentSweep,
         st: &mut RenderStats,
     ) -> Piece {
         // A point of one of the segments (the first start's) inside a

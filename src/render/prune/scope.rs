@@ -268,12 +268,6 @@ impl<'a> Scope<'a> {
         pieces
     }
 
-    /// Whether the scene is flat, and [`Scope::first_pieces_near`], for
-    /// `probe::sweep`.
-    pub(crate) fn sweep_mode(&self, t0: f64, near: f64, t1: f64) -> (bool, Vec<(f64, f64)>) {
-        (self.ctx.flat, self.first_pieces_near(t0, near, t1))
-    }
-
     /// The first end of a slice of this tile after `t`, if any.
     pub(crate) fn slice_end_after(&self, t: f64) -> Option<f64> {
         let i = self.pruner.slice_ends.partition_point(|&e| e <= t);

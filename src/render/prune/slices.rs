@@ -209,6 +209,8 @@ impl<'e> Beam<'e> {
     //
     // The region is placed beforehand (`Beam::place`), with its pruning
     // from `tape` where that was made with its sibling's.
+    // long-fn: one node of the slice tree, placed, pruned and recursed
+    // into; the recursion's state is the function's locals.
     fn node(
         &self,
         tr: &Scope<'_>,

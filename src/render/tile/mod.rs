@@ -7,6 +7,7 @@ use image::Rgb;
 
 use crate::interval::Interval;
 use crate::render::context::EvalSet;
+use crate::render::context::stats::RenderStats;
 use crate::render::enclose::mean_value::MeanValuePolicy;
 use crate::render::light::shade::{self, TileSurfs};
 use crate::render::light::shadow;
@@ -128,24 +129,9 @@ pub(crate) fn render_tile(
         st.mean_value = MeanValuePolicy::never();
     }
     let t_trace = Instant::now();
-    let n = (spec.w * spec.h) as usize;
     if proven_empty(tr, opts, &spec, &mut st) {
         st.stats.trace_cpu_ms += ms_since(t_trace);
-        return TileOut {
-            x0: spec.x0,
-            y0: spec.y0,
-            w: spec.w,
-            h: spec.h,
-            linear: vec![background; n],
-            shadowed: vec![0; n],
-            coverage: vec![0.0; n],
-            samples: vec![1; n],
-            depth: vec![f64::INFINITY; n],
-            normals: opts.want_normals.then(|| vec![[f64::NAN; 3]; n]),
-            class: None,
-            state: st,
-            classified: None,
-        };
+        return empty_out(&spec, opts, background, st);
     }
     let mut tile = tile_rays(tr, opts, &spec);
     let bracketed = refine_bracketed(tr, &spec, &mut tile, &mut st);
@@ -178,37 +164,9 @@ pub(crate) fn render_tile(
     // to rounding (`render::signs_tests`).
     let t_shade = Instant::now();
     let cut = CutFaces::of(tr, &tile);
-    let mut surfs = TileSurfs::new(n, tile.hits.iter().flatten().count());
-    for (k, h) in tile.hits.iter().enumerate() {
-        if let Some(h) = h
-            && !(h.inside && cut.is_some())
-        {
-            surfs.set(k, shade::surface(tr_vis, &tile.ray(k), h, &mut st.stats));
-        }
-    }
-    shade::mend_singular_normals(
-        tr_vis,
-        |k| tile.ray(k),
-        &tile.hits,
-        &mut surfs,
-        &mut st.stats,
-    );
+    let surfs = surfaces(tr_vis, &tile, cut.is_some(), &mut st.stats);
     st.stats.shade_cpu_ms += ms_since(t_shade);
-
-    // A hit within a hint's reach takes the hint's shadow state, and
-    // needs no shadow beam either.
-    let known: Vec<Option<u64>> = match spec.shadow_hints {
-        Some(hints) => tile
-            .hits
-            .iter()
-            .zip(hints)
-            .map(|(h, s)| {
-                h.filter(|h| (h.t - s.t).abs() <= s.reach)
-                    .map(|_| s.shadowed)
-            })
-            .collect(),
-        None => Vec::new(),
-    };
+    let known = known_shadows(&spec, &tile);
     let lit_by_beam = shadow_beams(tr, &tile, &surfs, &known, &mut st);
     let mut lit = shade_pixels(
         tr,
@@ -223,6 +181,77 @@ pub(crate) fn render_tile(
         cut.paint(tr, &tile, &mut lit, &mut st);
         st.stats.shade_cpu_ms += ms_since(t_cut);
     }
+    traced_out(&spec, opts, &tile, lit, st)
+}
+
+/// The output of a tile proven empty: background everywhere.
+fn empty_out(
+    spec: &TileSpec<'_>,
+    opts: &RenderOptions,
+    background: [f64; 3],
+    st: TileState,
+) -> TileOut {
+    let n = (spec.w * spec.h) as usize;
+    TileOut {
+        x0: spec.x0,
+        y0: spec.y0,
+        w: spec.w,
+        h: spec.h,
+        linear: vec![background; n],
+        shadowed: vec![0; n],
+        coverage: vec![0.0; n],
+        samples: vec![1; n],
+        depth: vec![f64::INFINITY; n],
+        normals: opts.want_normals.then(|| vec![[f64::NAN; 3]; n]),
+        class: None,
+        state: st,
+        classified: None,
+    }
+}
+
+/// The surfaces at the tile's hits (none at a cut face's hits when the
+/// tile paints them on the shared path), their singular normals mended.
+fn surfaces(tr_vis: &Scope<'_>, tile: &TileRays, cut: bool, stats: &mut RenderStats) -> TileSurfs {
+    let n = tile.hits.len();
+    let mut surfs = TileSurfs::new(n, tile.hits.iter().flatten().count());
+    for (k, h) in tile.hits.iter().enumerate() {
+        if let Some(h) = h
+            && !(h.inside && cut)
+        {
+            surfs.set(k, shade::surface(tr_vis, &tile.ray(k), h, stats));
+        }
+    }
+    shade::mend_singular_normals(tr_vis, |k| tile.ray(k), &tile.hits, &mut surfs, stats);
+    surfs
+}
+
+/// Per pixel, the shadow state of the hint whose reach its hit lies
+/// within: such a hit takes it, and needs no shadow beam either (empty
+/// without hints).
+fn known_shadows(spec: &TileSpec<'_>, tile: &TileRays) -> Vec<Option<u64>> {
+    let Some(hints) = spec.shadow_hints else {
+        return Vec::new();
+    };
+    tile.hits
+        .iter()
+        .zip(hints)
+        .map(|(h, s)| {
+            h.filter(|h| (h.t - s.t).abs() <= s.reach)
+                .map(|_| s.shadowed)
+        })
+        .collect()
+}
+
+/// The output of a traced tile: its lit pixels, coverage, depth and
+/// classes.
+fn traced_out(
+    spec: &TileSpec<'_>,
+    opts: &RenderOptions,
+    tile: &TileRays,
+    lit: shading::Lit,
+    st: TileState,
+) -> TileOut {
+    let n = tile.hits.len();
     TileOut {
         x0: spec.x0,
         y0: spec.y0,

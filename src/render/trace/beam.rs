@@ -26,9 +26,10 @@
 //! (`Scope::interval_tight`), which pays off on the small hulls near a
 //! surface, where the natural extension overestimates most.
 
-use super::probe::{self, Floor, Form, Rect, Sweep};
+use super::probe::{self, Floor, Form, Rect, Sweep, SweepRange};
 use super::ray::{scene_point, trace_ray, trace_ray_near_first};
 use super::refine::{Bracket, refine_batch, scene_points};
+use super::sweep::{self, Search, SweepState, Visit};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_hull, ray_box};
 use crate::render::context::stats::RenderStats;
@@ -152,6 +153,8 @@ pub(crate) fn single_ray(
 
 // The beam tests of a block of several pixels over its T range: rejected,
 // included (every ray's first root bracketed), or split in four.
+// long-fn: one decision (rejected, included or split) read as the
+// sequence of tests the paper gives, each needing the last one's facts.
 fn beam_tests(
     tr: &Scope<'_>,
     tile: &mut TileRays,
@@ -167,7 +170,7 @@ fn beam_tests(
     let min_w = |t: f64| probe::min_width(tr, side, t);
     let eval_min =
         |t: Interval, st: &mut TileState| probe::scene_signs(tr, live, corners.hull(t), form, st);
-    let (ta, tb) = match probe::sweep(tr.sweep_mode(t0, near, t1), t0, t1, min_w, |t| {
+    let (ta, tb) = match probe::sweep(tr, SweepRange { t0, near, t1 }, min_w, |t| {
         eval_min(t, st).positive()
     }) {
         Sweep::Empty => {
@@ -376,15 +379,39 @@ fn decreasing_in_pieces(
     depth: u32,
     st: &mut RenderStats,
 ) -> bool {
-    if decreasing(tr, corners, Interval::new(a, b), live, st) {
-        return true;
+    // A piece `depth` halvings down is 2^-depth of the range wide, one a
+    // level up twice that: the threshold between them stops the halving.
+    let narrowest = 1.5 * (b - a) / f64::from(1u32 << depth);
+    let mut search = AllDecreasing {
+        corners,
+        live,
+        narrowest,
+        st,
+    };
+    sweep::sweep(tr, vec![(a, b)], &mut search, &mut SweepState::new()).is_none()
+}
+
+// The search of `decreasing_in_pieces`: found, a piece too narrow to
+// halve on which the decrease was not proven.
+struct AllDecreasing<'a> {
+    corners: &'a CornerRays,
+    live: &'a [u32],
+    narrowest: f64,
+    st: &'a mut RenderStats,
+}
+
+impl Search for AllDecreasing<'_> {
+    type Found = ();
+
+    fn visit(&mut self, tr: &Scope<'_>, (a, b): (f64, f64), _: &mut SweepState) -> Visit<()> {
+        if decreasing(tr, self.corners, Interval::new(a, b), self.live, self.st) {
+            Visit::Drop
+        } else if b - a <= self.narrowest {
+            Visit::Stop(())
+        } else {
+            Visit::Halve
+        }
     }
-    if depth == 0 {
-        return false;
-    }
-    let m = 0.5 * (a + b);
-    decreasing_in_pieces(tr, corners, (a, m), live, depth - 1, st)
-        && decreasing_in_pieces(tr, corners, (m, b), live, depth - 1, st)
 }
 
 // Whether every ray of the block starts inside a solid, proven by F < 0

@@ -8,6 +8,7 @@ use crate::interval::Interval;
 use crate::interval::boxes::IBox;
 use crate::render::enclose::proof::SignBound;
 use crate::render::prune::scope::Scope;
+use crate::render::trace::sweep::{self, Search, SweepState, Visit};
 use crate::render::prune::scope::TileState;
 
 /// Floor of the pixel spacing a sweep's smallest piece is sized from, so
@@ -173,54 +174,67 @@ pub(crate) enum Sweep {
     Candidate(f64, f64),
 }
 
-/// The rejection sweep of a beam over `[t0, t1]`: drops every piece
-/// `excluded` proves free of surface, front to back (see
-/// [`first_candidate`]); a `flat` scene gets one test over the whole range.
+/// The part of a beam's T range a rejection sweep covers: `[t0, t1]`,
+/// with `[t0, near]` a piece of its own, taken first, when
+/// `t0 < near < t1` (see [`Floor`]).
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct SweepRange {
+    /// Start of the range.
+    pub t0: f64,
+    /// End of the first piece (`t0`: none of its own).
+    pub near: f64,
+    /// End of the range.
+    pub t1: f64,
+}
+
+/// The rejection sweep of a beam over `range`: bisects nearest half
+/// first (on the sweep driver, from the pieces
+/// [`Scope::first_pieces_near`] cuts), drops every piece `excluded`
+/// proves free of surface, and returns the first piece it cannot drop
+/// once that piece is narrower than `min_w(start)` (or after
+/// [`MAX_SWEEP_PIECES`] pieces); a flat scene gets one test over the whole
+/// range.
 pub(crate) fn sweep(
-    (flat, pieces): (bool, Vec<(f64, f64)>),
-    t0: f64,
-    t1: f64,
+    tr: &Scope<'_>,
+    range: SweepRange,
     min_w: impl Fn(f64) -> f64,
     mut excluded: impl FnMut(Interval) -> bool,
 ) -> Sweep {
-    if flat {
+    let SweepRange { t0, near, t1 } = range;
+    if tr.ctx.flat {
         return if excluded(Interval::new(t0, t1)) {
             Sweep::Empty
         } else {
             Sweep::Flat
         };
     }
-    match first_candidate(pieces, min_w, excluded) {
+    let pieces = tr.first_pieces_near(t0, near, t1);
+    let mut search = FirstCandidate { min_w, excluded };
+    match sweep::sweep(tr, pieces, &mut search, &mut SweepState::new()) {
         Some((ta, tb)) => Sweep::Candidate(ta, tb),
         None => Sweep::Empty,
     }
 }
 
-/// The front-to-back rejection sweep over `[t0, t1]`, cut first into
-/// `pieces` (a stack, nearest last; see `Scope::first_pieces`): bisects nearest
-/// half first, drops every piece `excluded` proves free of surface, and
-/// returns the first piece it cannot drop once that piece is narrower than
-/// `min_w(start)` (or after [`MAX_SWEEP_PIECES`] pieces); `None` when the
-/// whole range is dropped.
-fn first_candidate(
-    mut stack: Vec<(f64, f64)>,
-    min_w: impl Fn(f64) -> f64,
-    mut excluded: impl FnMut(Interval) -> bool,
-) -> Option<(f64, f64)> {
-    let mut pieces = 0usize;
-    while let Some((a, c)) = stack.pop() {
-        pieces += 1;
-        if excluded(Interval::new(a, c)) {
-            continue;
+// The search of `sweep`: the first piece not excluded, once narrow
+// enough or out of budget.
+struct FirstCandidate<W, E> {
+    min_w: W,
+    excluded: E,
+}
+
+impl<W: Fn(f64) -> f64, E: FnMut(Interval) -> bool> Search for FirstCandidate<W, E> {
+    type Found = (f64, f64);
+
+    fn visit(&mut self, _: &Scope<'_>, (a, c): (f64, f64), at: &mut SweepState) -> Visit<(f64, f64)> {
+        if (self.excluded)(Interval::new(a, c)) {
+            Visit::Drop
+        } else if c - a <= (self.min_w)(a) || at.pieces >= MAX_SWEEP_PIECES {
+            Visit::Stop((a, c))
+        } else {
+            Visit::Halve
         }
-        if c - a <= min_w(a) || pieces >= MAX_SWEEP_PIECES {
-            return Some((a, c));
-        }
-        let m = 0.5 * (a + c);
-        stack.push((m, c));
-        stack.push((a, m));
     }
-    None
 }
 
 /// Where the inclusion test of the tracer's blocks looks on past
@@ -313,32 +327,25 @@ mod tests {
 
     #[test]
     fn the_sweep_finds_the_first_piece_with_surface() {
-        for pieces in [1, 4, 5] {
-            let s = sweep(
-                (false, equal_pieces(0.0, 8.0, pieces)),
-                0.0,
-                8.0,
-                |_| 0.5,
-                |t| t.hi < 3.0 || t.lo > 3.5,
-            );
+        let range = SweepRange {
+            t0: 0.0,
+            near: 0.0,
+            t1: 8.0,
+        };
+        // One piece, or the range cut at slice ends into 4 or 5 first.
+        for ends in [vec![], vec![2.0, 4.0, 6.0], vec![1.6, 3.2, 4.8, 6.4]] {
+            let mut tr = Scope::for_tests(&crate::scene::Camera::default(), 8);
+            tr.pruner.slice_ends = ends.into();
+            let s = sweep(&tr, range, |_| 0.5, |t| t.hi < 3.0 || t.lo > 3.5);
             let Sweep::Candidate(a, b) = s else {
                 panic!("{s:?}")
             };
             assert!(a <= 3.0 && b >= 3.0 && b - a <= 0.5, "{a} {b}");
-            let s = sweep(
-                (false, equal_pieces(0.0, 8.0, pieces)),
-                0.0,
-                8.0,
-                |_| 0.5,
-                |_| true,
-            );
-            assert_eq!(s, Sweep::Empty);
+            assert_eq!(sweep(&tr, range, |_| 0.5, |_| true), Sweep::Empty);
         }
-        let whole = equal_pieces(0.0, 8.0, 1);
-        assert_eq!(
-            sweep((true, whole), 0.0, 8.0, |_| 0.5, |_| false),
-            Sweep::Flat
-        );
+        let mut tr = Scope::for_tests(&crate::scene::Camera::default(), 8);
+        tr.ctx.flat = true;
+        assert_eq!(sweep(&tr, range, |_| 0.5, |_| false), Sweep::Flat);
         let p = equal_pieces(1.0, 2.0, 4);
         assert_eq!(p.last(), Some(&(1.0, 1.25)));
         assert_eq!(p[0], (1.75, 2.0));

@@ -32,6 +32,7 @@
 //! solids clipped by the bounds, and filled masks for 2D functions.
 
 use super::refine::{refine, sign_change};
+use super::sweep::{Piece, Search, SweepState, Visit, sweep};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, ray_box};
 use crate::render::Hit;
@@ -117,79 +118,81 @@ pub(crate) fn trace_ray_near_first(
         return Some(h);
     }
     let pieces = tr.ray_pieces(t0, near, t1);
-    let mut steps = 0usize;
-    sweep_ray(tr, ray, pieces, live, (&mut steps, f64::INFINITY), st)
+    let mut search = RaySearch {
+        ray,
+        live,
+        st,
+        cand: Vec::with_capacity(live.len()),
+        forms: Vec::with_capacity(live.len()),
+    };
+    sweep(tr, pieces, &mut search, &mut SweepState::new())
 }
 
 /// A piece this many times narrower than the one its functions were last
 /// pruned to prunes them again (to the piece's box) for its sub-pieces.
 const RAY_PRUNE_RATIO: f64 = 4.0;
 
-// The front-to-back bisection of `trace_ray` over the pieces on `stack`
-// (nearest last). `steps` counts pieces across nested calls; `scope` is
-// the width of the piece `tr`'s functions were last pruned to (infinite
-// at first). Where pruning is on, a piece `RAY_PRUNE_RATIO` times
-// narrower than `scope` that its interval does not reject is swept again,
-// with its sub-pieces, by a nested call with the functions pruned to it
-// (when that shrinks them): a ray's pieces soon shrink to a few pixels
-// across, over which a union of many objects keeps one or two, while the
-// tile's slices keep every object that meets them. Pruning is exact, so
-// the nesting changes the cost of the evaluations and the tightness of
-// their intervals, not the order in which pieces are visited.
-fn sweep_ray(
-    tr: &Scope<'_>,
-    ray: &PixelRay,
-    mut stack: Vec<(f64, f64)>,
-    live: &[u32],
-    (steps, scope): (&mut usize, f64),
-    st: &mut TileState,
-) -> Option<Hit> {
+// The search of `trace_ray` over its pieces, on the sweep driver
+// (`super::sweep`): the driver's piece count is the ray's step count,
+// across nested sweeps. Where pruning is on, a piece `RAY_PRUNE_RATIO`
+// times narrower than the one the evaluators were last specialised to,
+// that its interval does not reject, is swept again, with its
+// sub-pieces, with the functions pruned to it (when that shrinks them): a
+// ray's pieces soon shrink to a few pixels across, over which a union of
+// many objects keeps one or two, while the tile's slices keep every
+// object that meets them. Pruning is exact, so the nesting changes the
+// cost of the evaluations and the tightness of their intervals, not the
+// order in which pieces are visited.
+struct RaySearch<'r, 's> {
+    ray: &'r PixelRay,
+    live: &'r [u32],
+    st: &'s mut TileState,
     // The live objects that may vanish on the piece.
-    let mut cand: Vec<u32> = Vec::with_capacity(live.len());
+    cand: Vec<u32>,
     // The centred form's evaluations of each candidate, which interval
     // Newton reads again on the same piece.
-    let mut forms: Vec<(u32, Centred)> = Vec::with_capacity(live.len());
-    while let Some((a, b)) = stack.pop() {
-        *steps += 1;
+    forms: Vec<(u32, Centred)>,
+}
+
+impl Search for RaySearch<'_, '_> {
+    type Found = Hit;
+
+    fn visit(&mut self, tr: &Scope<'_>, (a, b): Piece, at: &mut SweepState) -> Visit<Hit> {
+        let (ray, live) = (self.ray, self.live);
         let bx = ray_box(ray.o, ray.d, Interval::new(a, b));
-        cand.clear();
+        self.cand.clear();
         for &k in live {
-            let f = tr.ctx.interval(k as usize, bx, &mut st.stats);
+            let f = tr.ctx.interval(k as usize, bx, &mut self.st.stats);
             if !proof::holds_no_surface(f) {
-                cand.push(k);
+                self.cand.push(k);
             }
         }
-        if cand.is_empty() {
-            continue;
+        if self.cand.is_empty() {
+            return Visit::Drop;
         }
         // Only a piece that may hold surface is pruned to: most pieces are
         // rejected by their first evaluation, which costs a third of a
         // pruning pass over the same tape.
         if tr.pruner.enabled
-            && (b - a) * RAY_PRUNE_RATIO <= scope
-            && let Some(set) = tr.pruned_to_ray(ray, Interval::new(a, b), st)
+            && (b - a) * RAY_PRUNE_RATIO <= at.specialised_width
+            && let Some(set) = tr.pruned_to_ray(ray, Interval::new(a, b), self.st)
         {
-            let local = tr.with_evals(&set);
-            let piece = vec![(a, b)];
-            if let Some(h) = sweep_ray(&local, ray, piece, live, (steps, b - a), st) {
-                return Some(h);
-            }
-            continue;
+            return Visit::Specialise(set);
         }
-        forms.clear();
-        for &k in &cand {
-            let c = centred(tr, ray, k as usize, bx, (a, b), &mut st.stats);
+        self.forms.clear();
+        for &k in &self.cand {
+            let c = centred(tr, ray, k as usize, bx, (a, b), &mut self.st.stats);
             if !c.positive {
-                forms.push((k, c));
+                self.forms.push((k, c));
             }
         }
-        if forms.is_empty() {
-            continue;
+        if self.forms.is_empty() {
+            return Visit::Drop;
         }
-        let stt = &mut st.stats;
+        let stt = &mut self.st.stats;
         let tol = tr.ctx.cam.tolerance(a);
-        if *steps >= MAX_RAY_STEPS {
-            return Some(narrow_hit(tr, ray, live, a, b, stt));
+        if at.pieces >= MAX_RAY_STEPS {
+            return Visit::Stop(narrow_hit(tr, ray, live, a, b, stt));
         }
         // A narrow piece is a hit when its ends show a sign change (the
         // root is refined); without one it is a tangency candidate, bisected
@@ -198,41 +201,27 @@ fn sweep_ray(
         if b - a <= tol
             && (b - a <= tol / TANGENT_SPLIT || sign_change(tr, ray, live, (a, b), stt).is_some())
         {
-            return Some(narrow_hit(tr, ray, live, a, b, stt));
+            return Visit::Stop(narrow_hit(tr, ray, live, a, b, stt));
         }
-        // The sub-pieces to sweep next go on the stack, nearest last.
-        let halves = |na: f64, nb: f64, stack: &mut Vec<(f64, f64)>| {
-            let m = 0.5 * (na + nb);
-            stack.push((m, nb));
-            stack.push((na, m));
+        let [(k, c)] = self.forms[..] else {
+            return Visit::Halve;
         };
-        if let [(k, c)] = forms[..] {
-            match newton(tr, ray, k as usize, (a, b), c.parts, stt) {
-                Newton::Empty => continue,
-                Newton::Unique(na, nb) => {
-                    if let Some(h) = refine(tr, ray, live, na, nb, stt) {
-                        return Some(h);
-                    }
-                    // Point signs disagree with the proof at the limits of
-                    // precision: treat as a narrow piece.
-                    return Some(narrow_hit(tr, ray, live, na, nb, stt));
-                }
-                Newton::Shrunk(na, nb) if nb - na < 0.5 * (b - a) => stack.push((na, nb)),
-                Newton::Shrunk(na, nb) => halves(na, nb, &mut stack),
-                Newton::Gap(front, back) => {
-                    if let Some(p) = back {
-                        stack.push(p);
-                    }
-                    if let Some(p) = front {
-                        stack.push(p);
-                    }
-                }
+        match newton(tr, ray, k as usize, (a, b), c.parts, stt) {
+            Newton::Empty => Visit::Drop,
+            // Point signs that disagree with the proof at the limits of
+            // precision make it a narrow piece.
+            Newton::Unique(na, nb) => Visit::Stop(
+                refine(tr, ray, live, na, nb, stt)
+                    .unwrap_or_else(|| narrow_hit(tr, ray, live, na, nb, stt)),
+            ),
+            Newton::Shrunk(na, nb) if nb - na < 0.5 * (b - a) => Visit::Parts(Some((na, nb)), None),
+            Newton::Shrunk(na, nb) => {
+                let m = 0.5 * (na + nb);
+                Visit::Parts(Some((na, m)), Some((m, nb)))
             }
-        } else {
-            halves(a, b, &mut stack);
+            Newton::Gap(front, back) => Visit::Parts(front, back),
         }
     }
-    None
 }
 
 // The centred form along the ray: f(p(t)) ∈ F(p(m)) + (∇F·d)·([a, b] − m)

@@ -292,6 +292,9 @@ pub(crate) struct RefineScratch {
 /// [`refine`] for many brackets (`scratch.brackets`): each result is the
 /// same as its own call would give (the same steps on the same values),
 /// but every step's points are evaluated in one batch per object.
+// long-fn: the lockstep of every bracket's Illinois search (start, step,
+// finish, shade) shares one set of buffers; split, each part would take
+// the scratch apart again.
 pub(crate) fn refine_batch(
     tr: &Scope<'_>,
     scratch: &mut RefineScratch,
