@@ -3,6 +3,7 @@
 
 use super::classify::*;
 use super::*;
+use crate::render::enclose::monotone::decreasing_along;
 
 pub(super) struct Ctx<'t, 'a> {
     pub(super) tr: &'t Scope<'a>,
@@ -336,7 +337,7 @@ impl Ctx<'_, '_> {
         // enclosure anyway, and the cell is included only where it proves
         // the decrease.
         if self.threshold >= 1.0 {
-            if !proof::decreasing(tr.ctx.interval_dir(k, hb, dirs, st)[1]) {
+            if !decreasing_along(&tr.ctx, k, hb, dirs, st) {
                 return None;
             }
             let g = tr.ctx.interval_grad(k, hb, st);
@@ -366,7 +367,7 @@ impl Ctx<'_, '_> {
         } else {
             return None;
         };
-        let col = colour_interval(tr, tr.ctx.colors[k], &n, &v, &hb)?;
+        let col = colour_interval(&tr.ctx, tr.ctx.colors[k], &n, &v, &hb)?;
         Some(
             col.iter()
                 .all(|c| c.hi.clamp(0.0, 1.0) - c.lo.clamp(0.0, 1.0) <= self.threshold),

@@ -47,11 +47,12 @@ use super::shade::Surf;
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_hull, box_meet, point_box};
 use crate::render::context::stats::RenderStats;
+use crate::render::enclose::monotone::increasing_along;
 use crate::render::enclose::proof;
 use crate::render::prune::cells::{self, CellTapes};
 use crate::render::prune::scope::Scope;
-use crate::render::trace::sweep::{self, Search, SweepState, Visit};
 use crate::render::prune::scope::TileState;
+use crate::render::trace::sweep::{self, Search, SweepState, Visit};
 use crate::render::view::camera::{bounds_box, normalize};
 use crate::scene::LightKind;
 
@@ -307,7 +308,8 @@ impl Search for FreeSearch<'_, '_> {
             self.sw.front = Front::Unknown;
             return Visit::Drop;
         };
-        if tr.pruner.enabled && tr.ctx.large && (c - a) * SEGMENT_CELL_RATIO <= at.specialised_width {
+        if tr.pruner.enabled && tr.ctx.large && (c - a) * SEGMENT_CELL_RATIO <= at.specialised_width
+        {
             if let Some(set) = CellTapes::holding(tr, &clip, self.st) {
                 return Visit::Specialise(set);
             }
@@ -431,7 +433,7 @@ impl Segments<'_> {
             && maybe.iter().all(|&k| affordable(k))
             && maybe
                 .iter()
-                .all(|&k| proof::increasing(tr.ctx.interval_dir(k, bx, self.delta, st)[1]))
+                .all(|&k| increasing_along(&tr.ctx, k, bx, self.delta, st))
         {
             return Piece::Increasing;
         }

@@ -23,6 +23,7 @@ use crate::scene::LightKind;
 use glam::DVec3;
 
 mod shading;
+use crate::render::enclose::monotone;
 use shading::{CutFaces, class_color, shade_pixels, shadow_beams};
 
 /// Which pixels of the traced image a tile covers.
@@ -389,7 +390,7 @@ fn decreasing_along(
     st: &mut crate::render::context::stats::RenderStats,
 ) -> bool {
     let bx = crate::interval::boxes::ray_box(ray.o, ray.d, Interval::new(b.a, b.b));
-    crate::render::enclose::proof::decreasing(tr.ctx.interval_dir(b.obj, bx, ray.d, st)[1])
+    monotone::decreasing_along(&tr.ctx, b.obj, bx, ray.d, st)
 }
 
 // The tile's pixel rays and their ranges inside the bounds, nothing traced.

@@ -7,7 +7,7 @@ pub(crate) mod plane;
 pub(crate) mod probe;
 pub mod ray;
 pub(crate) mod refine;
-pub(crate) mod sweep;
 #[cfg(test)]
 mod signs_tests;
+pub(crate) mod sweep;
 pub(crate) mod tile_rays;

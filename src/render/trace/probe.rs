@@ -8,8 +8,8 @@ use crate::interval::Interval;
 use crate::interval::boxes::IBox;
 use crate::render::enclose::proof::SignBound;
 use crate::render::prune::scope::Scope;
-use crate::render::trace::sweep::{self, Search, SweepState, Visit};
 use crate::render::prune::scope::TileState;
+use crate::render::trace::sweep::{self, Search, SweepState, Visit};
 
 /// Floor of the pixel spacing a sweep's smallest piece is sized from, so
 /// that the sweep ends where the spacing vanishes (at the eye of a
@@ -226,7 +226,12 @@ struct FirstCandidate<W, E> {
 impl<W: Fn(f64) -> f64, E: FnMut(Interval) -> bool> Search for FirstCandidate<W, E> {
     type Found = (f64, f64);
 
-    fn visit(&mut self, _: &Scope<'_>, (a, c): (f64, f64), at: &mut SweepState) -> Visit<(f64, f64)> {
+    fn visit(
+        &mut self,
+        _: &Scope<'_>,
+        (a, c): (f64, f64),
+        at: &mut SweepState,
+    ) -> Visit<(f64, f64)> {
         if (self.excluded)(Interval::new(a, c)) {
             Visit::Drop
         } else if c - a <= (self.min_w)(a) || at.pieces >= MAX_SWEEP_PIECES {

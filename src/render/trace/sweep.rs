@@ -147,13 +147,19 @@ mod tests {
         let mut at = SweepState::new();
         let found = sweep(&scope, vec![(1.0, 2.0), (0.0, 1.0)], &mut find, &mut at);
         assert_eq!(found, Some((0.25, 0.5)));
-        assert_eq!(find.seen, [(0.0, 1.0), (0.0, 0.5), (0.0, 0.25), (0.25, 0.5)]);
+        assert_eq!(
+            find.seen,
+            [(0.0, 1.0), (0.0, 0.5), (0.0, 0.25), (0.25, 0.5)]
+        );
         assert_eq!(at.pieces, 4);
         // A target nowhere drops every piece, the second start included.
         find.target = 5.0;
         find.seen.clear();
         let mut at = SweepState::new();
-        assert_eq!(sweep(&scope, vec![(1.0, 2.0), (0.0, 1.0)], &mut find, &mut at), None);
+        assert_eq!(
+            sweep(&scope, vec![(1.0, 2.0), (0.0, 1.0)], &mut find, &mut at),
+            None
+        );
         assert_eq!(find.seen, [(0.0, 1.0), (1.0, 2.0)]);
     }
 
