@@ -4,9 +4,9 @@
 //! as one table.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use ibeam::eval::Evaluator;
 use ibeam::eval::interp::Interpreter;
 use ibeam::eval::jit::JitEvaluator;
+use ibeam::eval::{Bulk, Evaluator};
 use ibeam::interval::Interval;
 use ibeam::ir::passes::simplify;
 use std::hint::black_box;

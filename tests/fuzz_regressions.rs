@@ -34,7 +34,7 @@ fn simplify_vm_model_times_zero() {
 /// (now the `contained` fact of `ir::prune`).
 #[test]
 fn pruned_function_keeps_its_bits_at_a_box_corner() {
-    use ibeam::eval::Evaluator;
+    use ibeam::eval::Single;
     use ibeam::eval::interp::Interpreter;
     use ibeam::interval::Interval;
     let f = random_function(108843400875938916, 8);
@@ -63,7 +63,7 @@ fn pruned_function_keeps_its_bits_at_a_box_corner() {
 /// seed whose functions changed when ops were added; this is its shape.)
 #[test]
 fn pruning_keeps_the_sign_of_a_zero_from_max() {
-    use ibeam::eval::Evaluator;
+    use ibeam::eval::Single;
     use ibeam::eval::interp::Interpreter;
     use ibeam::interval::Interval;
     use ibeam::ir::{BinaryOp, Builder, UnaryOp, Var};

@@ -10,7 +10,7 @@
 mod common;
 
 use common::tight::{self, Tight};
-use ibeam::eval::Evaluator;
+use ibeam::eval::Single;
 use ibeam::eval::interp::Interpreter;
 use ibeam::interval::{Interval, TRANSCENDENTAL_ULPS};
 use ibeam::ir::random::{BINARY_OPS, UNARY_OPS, random_function};

@@ -1,7 +1,7 @@
 //! Simplification passes: random functions keep their values, and the
 //! specific rewrites happen.
 
-use ibeam::eval::Evaluator;
+use ibeam::eval::Single;
 use ibeam::eval::interp::Interpreter;
 use ibeam::interval::Interval;
 use ibeam::ir::passes::{PASSES, cse, dce, fold_constants, simplify, simplify_traced};

@@ -2,7 +2,7 @@
 //! the same bits as the original at every point of the box, and it is
 //! much shorter where a CSG tree has been decided.
 
-use ibeam::eval::Evaluator;
+use ibeam::eval::Single;
 use ibeam::eval::interp::Interpreter;
 use ibeam::interval::Interval;
 use ibeam::ir::Function;

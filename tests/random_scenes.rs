@@ -19,9 +19,9 @@ mod common;
 use std::sync::Arc;
 
 use common::source_number as num;
-use ibeam::eval::Evaluator;
 use ibeam::eval::interp::Interpreter;
 use ibeam::eval::{EvalKind, build_evaluators};
+use ibeam::eval::{Evaluator, Single};
 use ibeam::interval::Interval;
 use ibeam::ir::passes;
 use ibeam::ir::random::Rng;

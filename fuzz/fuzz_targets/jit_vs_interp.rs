@@ -10,7 +10,7 @@
 
 #![no_main]
 
-use ibeam::eval::Evaluator;
+use ibeam::eval::Single;
 use ibeam::eval::interp::Interpreter;
 use ibeam::eval::jit::JitEvaluator;
 use ibeam::interval::Interval;

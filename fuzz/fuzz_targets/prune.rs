@@ -12,7 +12,7 @@
 
 #![no_main]
 
-use ibeam::eval::Evaluator;
+use ibeam::eval::Single;
 use ibeam::eval::interp::Interpreter;
 use ibeam::interval::Interval;
 use ibeam::ir::passes;

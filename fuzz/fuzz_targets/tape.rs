@@ -27,7 +27,7 @@
 
 #![no_main]
 
-use ibeam::eval::Evaluator;
+use ibeam::eval::Single;
 use ibeam::eval::interp::Interpreter;
 use ibeam::eval::tape::{Keep, Tape, Workspace};
 use ibeam::interval::Interval;

@@ -3,9 +3,9 @@
 
 use super::image::MethodArg;
 use super::{CliError, EvalKind, build_evaluator};
-use ibeam::eval::Evaluator;
 use ibeam::eval::jit::JitEvaluator;
 use ibeam::eval::taped::TapeEvaluator;
+use ibeam::eval::{Bulk, Evaluator};
 use ibeam::interval::Interval;
 use ibeam::ir::passes::simplify;
 use ibeam::render::{RenderOptions, RenderStats, render};

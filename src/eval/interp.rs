@@ -8,7 +8,7 @@
 //! forward-mode gradients (dual numbers), intervals, and interval gradients
 //! (interval dual numbers).
 
-use crate::eval::{Evaluator, Grad, IntervalGrad};
+use crate::eval::{Bulk, Grad, IntervalGrad, Single, Specialise};
 use crate::interval::Interval;
 use crate::ir::semantics::*;
 use crate::ir::validate::{InvalidIr, debug_validate, validate};
@@ -212,8 +212,8 @@ fn first<const S: usize>(d: [Option<Interval>; 3]) -> [Interval; S] {
 }
 
 /// `op(a)` and `S` partials by the reference rules: the bits of the
-/// interpreter's [`Evaluator::interval_dir`] (S = 1) and
-/// [`Evaluator::interval_grad`] (S = 3), as each partial is computed from
+/// interpreter's [`Single::interval_dir`] (S = 1) and
+/// [`Single::interval_grad`] (S = 3), as each partial is computed from
 /// the same partial of the operands alone. The ops of distance fields are
 /// written out with the rules' own arithmetic; the rest go through the
 /// shared rules.
@@ -282,7 +282,7 @@ where
 }
 
 /// `op(a)` and its three partials by the reference rules: the bits of the
-/// interpreter's [`Evaluator::point_grad`], with the ops of distance
+/// interpreter's [`Single::point_grad`], with the ops of distance
 /// fields written out (see [`dual_unary`]).
 #[inline(always)]
 pub(crate) fn point_dual_unary(op: UnaryOp, (a, x): (f64, [f64; 3])) -> (f64, [f64; 3]) {
@@ -497,11 +497,7 @@ fn run_igrad(
     }
 }
 
-impl Evaluator for Interpreter {
-    fn function(&self) -> Option<&Function> {
-        Some(&self.f)
-    }
-
+impl Single for Interpreter {
     fn point(&self, p: [f64; 3]) -> f64 {
         SCRATCH.with_borrow_mut(|s| {
             run_point(&self.f.ops, p, &mut s.point);
@@ -540,6 +536,14 @@ impl Evaluator for Interpreter {
             let r = s.igrad[self.f.root.index()];
             [r.v, r.d[0]]
         })
+    }
+}
+
+impl Bulk for Interpreter {}
+
+impl Specialise for Interpreter {
+    fn function(&self) -> Option<&Function> {
+        Some(&self.f)
     }
 }
 

@@ -16,12 +16,19 @@ pub use build::{EvalKind, build_evaluator, build_evaluators};
 
 use crate::interval::Interval;
 
-/// Evaluates one surface function in the four ways the tracer needs.
+/// The tracer's evaluators: one surface function with every capability
+/// below, which every type with all three has.
 ///
 /// Implementations must agree with the interpreter: point values bit for
 /// bit (within a documented ulp bound for transcendentals), and every
 /// interval must contain the point values at every point of its box.
-pub trait Evaluator: Send + Sync {
+pub trait Evaluator: Bulk + Specialise {}
+
+impl<T: Bulk + Specialise + ?Sized> Evaluator for T {}
+
+/// Single evaluations, one point or box a call: what a search along one
+/// ray asks for.
+pub trait Single: Send + Sync {
     /// f(x, y, z).
     fn point(&self, p: [f64; 3]) -> f64;
 
@@ -36,7 +43,7 @@ pub trait Evaluator: Send + Sync {
 
     /// Intervals containing f and its derivative along `v`, `∇f·v`, over
     /// the box `b` (for every direction in the box `v`). The default takes
-    /// the dot product of [`Evaluator::interval_grad`]; the evaluators
+    /// the dot product of [`Single::interval_grad`]; the evaluators
     /// carry the one directional partial in forward mode, which costs
     /// about half as much and is often tighter.
     fn interval_dir(&self, b: [Interval; 3], v: [Interval; 3]) -> [Interval; 2] {
@@ -44,21 +51,54 @@ pub trait Evaluator: Send + Sync {
         let d = crate::interval::boxes::dot(&g.d, &v);
         [g.v, d]
     }
+}
 
+/// Many points or boxes a call, as columns: what blocks and tiles ask
+/// for. The defaults loop over [`Single`]; evaluators with a faster path
+/// (tapes, native code) override them.
+pub trait Bulk: Single {
+    /// `out[i] = f(xs[i], ys[i], zs[i])` for every i.
+    fn point_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = self.point([xs[i], ys[i], zs[i]]);
+        }
+    }
+
+    /// `out[i]` = f and its gradient at `(xs[i], ys[i], zs[i])`, the same
+    /// bits as [`Single::point_grad`] at each point.
+    fn point_grad_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [Grad]) {
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = self.point_grad([xs[i], ys[i], zs[i]]);
+        }
+    }
+
+    /// `out[i] = F(boxes[i])` for every i.
+    fn interval_batch(&self, boxes: &[[Interval; 3]], out: &mut [Interval]) {
+        for (b, o) in boxes.iter().zip(out.iter_mut()) {
+            *o = self.interval(*b);
+        }
+    }
+}
+
+/// What an evaluator is and what specialising it to a region starts
+/// from: its function, its region and parent when it was pruned, and
+/// whether it runs native code. Every method has a default for an
+/// evaluator of a whole function that compiles nothing.
+pub trait Specialise {
     /// The IR function this evaluator evaluates, when it has one (the
     /// renderer prunes it per tile, see `crate::ir::prune`).
     fn function(&self) -> Option<&crate::ir::Function> {
         None
     }
 
-    /// Where [`Evaluator::function`] is exact, when that is not
+    /// Where [`Specialise::function`] is exact, when that is not
     /// everywhere (a function pruned to a region).
     fn valid_region(&self) -> Option<[Interval; 3]> {
         None
     }
 
     /// The evaluator a pruned one was pruned from, which answers outside
-    /// its [`Evaluator::valid_region`].
+    /// its [`Specialise::valid_region`].
     fn parent(&self) -> Option<&std::sync::Arc<dyn Evaluator>> {
         None
     }
@@ -111,27 +151,5 @@ pub trait Evaluator: Send + Sync {
     /// the other threads go on rendering.
     fn compile_waits(&self) -> Vec<(std::time::Instant, std::time::Instant)> {
         Vec::new()
-    }
-
-    /// `out[i] = f(xs[i], ys[i], zs[i])` for every i.
-    fn point_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
-        for (i, o) in out.iter_mut().enumerate() {
-            *o = self.point([xs[i], ys[i], zs[i]]);
-        }
-    }
-
-    /// `out[i]` = f and its gradient at `(xs[i], ys[i], zs[i])`, the same
-    /// bits as [`Evaluator::point_grad`] at each point.
-    fn point_grad_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [Grad]) {
-        for (i, o) in out.iter_mut().enumerate() {
-            *o = self.point_grad([xs[i], ys[i], zs[i]]);
-        }
-    }
-
-    /// `out[i] = F(boxes[i])` for every i.
-    fn interval_batch(&self, boxes: &[[Interval; 3]], out: &mut [Interval]) {
-        for (b, o) in boxes.iter().zip(out.iter_mut()) {
-            *o = self.interval(*b);
-        }
     }
 }

@@ -8,7 +8,7 @@
 //! sign ([`crate::eval::tape::Keep::Signs`]): every region then agrees on
 //! where the function is negative, zero or positive, but not on its value
 //! off the surface, and a formula that combines a value with a derivative
-//! takes both from [`Evaluator::answering`]. Regions nest two ways:
+//! takes both from [`Specialise::answering`]. Regions nest two ways:
 //! - the parent is the evaluator the tape was pruned from (a tile's, whose
 //!   parent is the whole function's), so an evaluation just outside a
 //!   block's region still runs the tile's short tape, not the whole
@@ -26,7 +26,7 @@ use std::sync::Arc;
 
 use crate::eval::tape::Tape;
 use crate::eval::taped::TapeEvaluator;
-use crate::eval::{Evaluator, Grad, IntervalGrad};
+use crate::eval::{Bulk, Evaluator, Grad, IntervalGrad, Single, Specialise};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_within, point_box};
 use crate::ir::Function;
@@ -193,7 +193,7 @@ impl Regional {
     }
 }
 
-impl Evaluator for Regional {
+impl Single for Regional {
     fn point(&self, p: [f64; 3]) -> f64 {
         self.for_point(p).point(p)
     }
@@ -213,7 +213,9 @@ impl Evaluator for Regional {
     fn interval_dir(&self, b: [Interval; 3], v: [Interval; 3]) -> [Interval; 2] {
         self.for_derivatives(&b).interval_dir(b, v)
     }
+}
 
+impl Bulk for Regional {
     /// One batch on what answers for the smallest region holding every
     /// point; point by point when the points leave the region. The same
     /// bits either way (pruning is exact).
@@ -271,8 +273,10 @@ impl Evaluator for Regional {
             }
         }
     }
+}
 
-    /// The pruned function (exact on [`Evaluator::valid_region`]).
+impl Specialise for Regional {
+    /// The pruned function (exact on [`Specialise::valid_region`]).
     fn function(&self) -> Option<&Function> {
         Some(self.tape.tape().function())
     }

@@ -9,7 +9,7 @@
 //! of [`crate::ir::semantics`]); the conformance suite checks it.
 
 use crate::eval::tape::{Tape, with_workspace};
-use crate::eval::{Evaluator, Grad, IntervalGrad};
+use crate::eval::{Bulk, Grad, IntervalGrad, Single, Specialise};
 use crate::interval::Interval;
 use crate::ir::Function;
 
@@ -52,7 +52,7 @@ impl TapeEvaluator {
     }
 }
 
-impl Evaluator for TapeEvaluator {
+impl Single for TapeEvaluator {
     fn point(&self, p: [f64; 3]) -> f64 {
         with_workspace(|ws| self.tape.point(p, ws))
     }
@@ -72,11 +72,9 @@ impl Evaluator for TapeEvaluator {
     fn interval_dir(&self, b: [Interval; 3], v: [Interval; 3]) -> [Interval; 2] {
         with_workspace(|ws| self.tape.interval_dir(b, v, ws))
     }
+}
 
-    fn function(&self) -> Option<&Function> {
-        Some(self.tape.function())
-    }
-
+impl Bulk for TapeEvaluator {
     fn point_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
         with_workspace(|ws| {
             by_chunks([xs, ys, zs], out, |cols, out| {
@@ -99,5 +97,11 @@ impl Evaluator for TapeEvaluator {
                 self.tape.interval_batch(b, out, ws);
             }
         })
+    }
+}
+
+impl Specialise for TapeEvaluator {
+    fn function(&self) -> Option<&Function> {
+        Some(self.tape.function())
     }
 }

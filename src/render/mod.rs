@@ -1,43 +1,20 @@
 //! The guaranteed beam tracer, after Flórez et al.
 //!
-//! The image is cut into 32×32 tiles traced in parallel. Each tile is a
-//! block of pixels whose rays form a beam ([`camera`] gives its exact
-//! hull); [`beam`] rejects empty stretches of the beam with interval
-//! arithmetic, settles blocks whose rays all cross the surface in a proven
-//! bracket (inclusion test), and splits the rest down to single rays,
-//! which [`ray`] traces with guaranteed first-root isolation. [`shade`]
-//! lights the hits with guaranteed shadows. Two baselines share the code:
-//! [`Method::Pixel`] (one interval ray per pixel, no beams) and
-//! [`Method::Point`] (fixed-step point sampling, the technique the paper
-//! improves on).
+//! The image is cut into 32×32 tiles traced in parallel ([`Frame`]). Each
+//! tile is a block of pixels whose rays form a beam; the tracer rejects
+//! empty stretches of the beam with interval arithmetic, settles blocks
+//! whose rays all cross the surface in a proven bracket (inclusion test),
+//! and splits the rest down to single rays with guaranteed first-root
+//! isolation; shadows and anti-aliasing ([`aa`]) use the same tests. Two
+//! baselines share the code: [`Method::Pixel`] (one interval ray per
+//! pixel) and [`Method::Point`] (fixed-step point sampling). Output is the
+//! same bytes for any thread count.
 //!
-//! [`aa`] adds anti-aliasing on top of any method ([`render_aa`]):
-//! interval adaptive (extra samples only where a pixel's beam cannot
-//! prove one smoothly lit surface) or regular grid supersampling;
-//! `crate::bench::accuracy` measures every method against a supersampled reference.
-//!
-//! The scene function is the minimum over the objects; the object hit is
-//! the one whose own f is smallest at the hit point. Output is identical
-//! for any thread count: every tile is computed independently and the
-//! results and counters are merged in tile order.
-//!
-//! [`fit`] finds a box guaranteed to hold the solid, and a camera that
-//! frames it.
-//!
-//! Private parts: `frame` checks the options and runs and merges the
-//! tiles; `band` turns a row of tiles into a streamed band of images;
-//! `tile` traces one (visibility, shadow beams, shading); `tracer` holds
-//! the state every tile reads and the state each tile carries (its
-//! counters and the mean-value policy's record); `probe` has the beam
-//! tests that [`beam`] and [`aa`] share.
-//!
-//! [`Frame::stream`] is the bounded-memory path: it traces one row of
-//! tiles at a time (with IAA, the next row's base render a step ahead,
-//! which its shadow-edge rule reads across the tiles' border) and
-//! hands out finished bands of image rows, which the
-//! CLI encodes into PNGs as they come (and, with
-//! [`Frame::with_float_layers`], the float values 16-bit PNGs and
-//! OpenEXR files are made from).
+//! The folders are layers, each using only those before it (see
+//! `docs/architecture.md`): `view` (camera, rays, pixels) → `context`
+//! (the evaluation context) → `enclose` (what an evaluation proves) →
+//! `prune` (evaluators specialised to regions) → `trace` (the sweeps
+//! along rays) → `light` (shading, shadows) → `aa` → `tile` → `frame`.
 
 // The layers, lowest first: each uses only those above it in this list
 // (`tests/architecture` checks it).

@@ -395,7 +395,7 @@ fn a_planted_violation_fails() {
         ("ir/mod.rs", "use crate::interval::Interval;\n"),
         (
             "ir/prune.rs",
-            "//! docs\nfn f() {}\nuse crate::eval::Evaluator;\n",
+            "//! docs\nfn f() {}\nuse crate::eval::{Bulk, Evaluator, Single, Specialise};\n",
         ),
     ]);
     assert_eq!(bad.len(), 1, "{bad:?}");

@@ -3,7 +3,7 @@
 
 use super::{assert_fails, example, scratch};
 use crate::common::ibeam;
-use ibeam::eval::Evaluator;
+use ibeam::eval::Single;
 use ibeam::eval::interp::Interpreter;
 use ibeam::ir::random::Rng;
 use ibeam::lang::load_scene;

@@ -18,7 +18,7 @@ pub mod tight;
 
 use std::process::{Command, Output};
 
-use ibeam::eval::Evaluator;
+use ibeam::eval::{Bulk, Evaluator, Single, Specialise};
 use ibeam::interval::Interval;
 use ibeam::ir::random::{BINARY_OPS, Rng, UNARY_OPS};
 use ibeam::ir::semantics::{point_binary, point_powi, point_unary};

@@ -19,7 +19,7 @@
 use std::sync::Arc;
 
 use ibeam::eval::interp::Interpreter;
-use ibeam::eval::{Evaluator, Grad};
+use ibeam::eval::{Bulk, Evaluator, Grad, Single, Specialise};
 use ibeam::interval::Interval;
 use ibeam::ir::random::{Rng, random_function};
 use ibeam::ir::semantics::{run_interval, run_point};

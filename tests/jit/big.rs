@@ -176,10 +176,10 @@ fn large_functions_use_integer_selects_and_match() {
         } else {
             random_box(&mut r)
         };
-        let (got, want) = (jit.interval(bx), Evaluator::interval(&interp, bx));
+        let (got, want) = (jit.interval(bx), Single::interval(&interp, bx));
         assert!(same_iv(got, want), "{bx:?}: {got:?} vs {want:?}");
         let p = random_point(&mut r);
-        let (got, want) = (jit.point(p), Evaluator::point(&interp, p));
+        let (got, want) = (jit.point(p), Single::point(&interp, p));
         assert!(same(got, want), "{p:?}: {got:e} vs {want:e}");
     }
 }

@@ -15,7 +15,7 @@ use common::{
 
 use ibeam::eval::interp::Interpreter;
 use ibeam::eval::jit::{JitEvaluator, Kind, clif_text};
-use ibeam::eval::{Evaluator, Grad, IntervalGrad};
+use ibeam::eval::{Bulk, Evaluator, Grad, IntervalGrad, Single};
 use ibeam::interval::Interval;
 use ibeam::ir::random::{Rng, random_function};
 use ibeam::ir::semantics::{point_binary, point_powi, point_unary};

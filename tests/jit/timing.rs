@@ -75,14 +75,12 @@ fn prospero_speed() {
     let interp = Interpreter::new(f.clone());
     jit.compile_all().unwrap();
     let ti = time("interp point", &mut || {
-        pts.iter().map(|p| Evaluator::point(&interp, *p)).sum()
+        pts.iter().map(|p| Single::point(&interp, *p)).sum()
     });
     let tj = time("jit point", &mut || pts.iter().map(|p| jit.point(*p)).sum());
     println!("point speedup {:.1}x", ti.as_secs_f64() / tj.as_secs_f64());
     let ti = time("interp interval", &mut || {
-        bxs.iter()
-            .map(|b| Evaluator::interval(&interp, *b).lo)
-            .sum()
+        bxs.iter().map(|b| Single::interval(&interp, *b).lo).sum()
     });
     let tj = time("jit interval", &mut || {
         bxs.iter().map(|b| jit.interval(*b).lo).sum()

@@ -14,7 +14,7 @@ mod limits;
 #[path = "../common/models.rs"]
 mod models;
 
-use ibeam::eval::Evaluator;
+use ibeam::eval::Single;
 use ibeam::eval::interp::Interpreter;
 use ibeam::ir::{Function, Op};
 use ibeam::lang::{LoadError, function_from_formula, load_scene, load_scene_source};

@@ -21,7 +21,7 @@
 //! objects along the segment (which assumes f continuous next to the hit:
 //! it is read only to catch false shadows, never to excuse a light leak).
 
-use ibeam::eval::Evaluator;
+use ibeam::eval::Single;
 use ibeam::eval::interp::Interpreter;
 use ibeam::interval::Interval;
 use ibeam::scene::{LightKind, Projection, Scene};

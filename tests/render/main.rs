@@ -12,7 +12,7 @@ mod tracing;
 
 use std::sync::Arc;
 
-use ibeam::eval::{Evaluator, Grad, IntervalGrad};
+use ibeam::eval::{Bulk, Evaluator, Grad, IntervalGrad, Single, Specialise};
 use ibeam::interval::Interval;
 use ibeam::ir::{BinaryOp, Builder, Var};
 use ibeam::render::camera::{PixelRay, RayCamera};
@@ -34,7 +34,7 @@ struct Sphere {
     r2: f64,
 }
 
-impl Evaluator for Sphere {
+impl Single for Sphere {
     fn point(&self, p: [f64; 3]) -> f64 {
         (0..3).map(|i| (p[i] - self.c[i]).powi(2)).sum::<f64>() - self.r2
     }
@@ -58,13 +58,17 @@ impl Evaluator for Sphere {
     }
 }
 
+impl Bulk for Sphere {}
+
+impl Specialise for Sphere {}
+
 /// (x²+y²+z²+R²−r²)² − 4R²(x²+y²): a torus around the z axis.
 struct Torus {
     big: f64,
     small: f64,
 }
 
-impl Evaluator for Torus {
+impl Single for Torus {
     fn point(&self, p: [f64; 3]) -> f64 {
         let (rr, r) = (self.big * self.big, self.small * self.small);
         let s = p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + rr - r;
@@ -104,12 +108,16 @@ impl Evaluator for Torus {
     }
 }
 
+impl Bulk for Torus {}
+
+impl Specialise for Torus {}
+
 /// |‖p‖ − 1| − h: a shell of thickness 2h around the unit sphere.
 struct Shell {
     h: f64,
 }
 
-impl Evaluator for Shell {
+impl Single for Shell {
     fn point(&self, p: [f64; 3]) -> f64 {
         ((p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() - 1.0).abs() - self.h
     }
@@ -142,13 +150,17 @@ impl Evaluator for Shell {
     }
 }
 
+impl Bulk for Shell {}
+
+impl Specialise for Shell {}
+
 /// p[axis] − h: the half-space below a plane.
 struct Ground {
     axis: usize,
     h: f64,
 }
 
-impl Evaluator for Ground {
+impl Single for Ground {
     fn point(&self, p: [f64; 3]) -> f64 {
         p[self.axis] - self.h
     }
@@ -169,10 +181,14 @@ impl Evaluator for Ground {
     }
 }
 
+impl Bulk for Ground {}
+
+impl Specialise for Ground {}
+
 /// x² + y² − 1: a 2D disc (no z), drawn as a filled mask.
 struct Disc;
 
-impl Evaluator for Disc {
+impl Single for Disc {
     fn point(&self, p: [f64; 3]) -> f64 {
         p[0] * p[0] + p[1] * p[1] - 1.0
     }
@@ -192,6 +208,10 @@ impl Evaluator for Disc {
         }
     }
 }
+
+impl Bulk for Disc {}
+
+impl Specialise for Disc {}
 
 // ---------------------------------------------------------------- helpers
 

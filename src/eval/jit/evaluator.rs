@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use super::raw::{Code, IntervalBatchFn, IntervalFn, PointBatchFn, PointFn, PointGradFn};
 use super::{JitError, Kind, compile, lower};
 use crate::eval::taped::TapeEvaluator;
-use crate::eval::{Evaluator, Grad, IntervalGrad};
+use crate::eval::{Bulk, Grad, IntervalGrad, Single, Specialise};
 use crate::interval::Interval;
 use crate::ir::Function;
 
@@ -223,7 +223,7 @@ impl JitEvaluator {
     }
 }
 
-impl Evaluator for JitEvaluator {
+impl Single for JitEvaluator {
     fn point(&self, p: [f64; 3]) -> f64 {
         match self.answer(Kind::Point) {
             Answer::Native(Entry::Point(c)) => c.call(p),
@@ -277,7 +277,29 @@ impl Evaluator for JitEvaluator {
             _ => [Interval::ENTIRE; 2],
         }
     }
+}
 
+impl Bulk for JitEvaluator {
+    /// Evaluates `min(len)` points of the four slices in one native loop.
+    fn point_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
+        match self.answer(Kind::PointBatch) {
+            Answer::Native(Entry::PointBatch(c)) => c.call(xs, ys, zs, out),
+            Answer::Interpreted(i) => i.point_batch(xs, ys, zs, out),
+            _ => out.fill(f64::NAN),
+        }
+    }
+
+    /// Evaluates `min(len)` boxes in one native loop.
+    fn interval_batch(&self, boxes: &[[Interval; 3]], out: &mut [Interval]) {
+        match self.answer(Kind::IntervalBatch) {
+            Answer::Native(Entry::IntervalBatch(c)) => c.call(boxes, out),
+            Answer::Interpreted(i) => i.interval_batch(boxes, out),
+            _ => out.fill(Interval::ENTIRE),
+        }
+    }
+}
+
+impl Specialise for JitEvaluator {
     fn function(&self) -> Option<&Function> {
         Some(&self.inner.f)
     }
@@ -300,24 +322,6 @@ impl Evaluator for JitEvaluator {
             .filter_map(|k| self.inner.slots[k as usize].get())
             .filter_map(|s| s.waited.map(|t| (t, t + s.time)))
             .collect()
-    }
-
-    /// Evaluates `min(len)` points of the four slices in one native loop.
-    fn point_batch(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
-        match self.answer(Kind::PointBatch) {
-            Answer::Native(Entry::PointBatch(c)) => c.call(xs, ys, zs, out),
-            Answer::Interpreted(i) => i.point_batch(xs, ys, zs, out),
-            _ => out.fill(f64::NAN),
-        }
-    }
-
-    /// Evaluates `min(len)` boxes in one native loop.
-    fn interval_batch(&self, boxes: &[[Interval; 3]], out: &mut [Interval]) {
-        match self.answer(Kind::IntervalBatch) {
-            Answer::Native(Entry::IntervalBatch(c)) => c.call(boxes, out),
-            Answer::Interpreted(i) => i.interval_batch(boxes, out),
-            _ => out.fill(Interval::ENTIRE),
-        }
     }
 }
 

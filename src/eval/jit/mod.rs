@@ -8,7 +8,7 @@
 //! `extern "C"` calls to the very Rust functions the reference uses.
 //!
 //! ```
-//! use ibeam::eval::Evaluator;
+//! use ibeam::eval::{Bulk, Evaluator, Single, Specialise};
 //! use ibeam::ir::{BinaryOp, Builder, Var};
 //! let mut b = Builder::new();
 //! let (x, y) = (b.var(Var::X), b.var(Var::Y));

@@ -262,7 +262,7 @@ impl Tape {
     ///
     /// What changes is the root's value off its zero set, so what
     /// combines values from several evaluations must take them from one
-    /// tape (see [`crate::eval::Evaluator::answering`]); intervals over a
+    /// tape (see [`crate::eval::Specialise::answering`]); intervals over a
     /// box inside the pruned one hold 0, or lie above or below it,
     /// exactly when the whole function's do (`min` and `max` are monotone
     /// and keep their operands' signs).

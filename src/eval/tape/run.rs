@@ -39,7 +39,7 @@ impl Tape {
     }
 
     /// f and its gradient at `p`, the same bits as the reference
-    /// interpreter's [`crate::eval::Evaluator::point_grad`].
+    /// interpreter's [`crate::eval::Single::point_grad`].
     pub fn point_grad(&self, p: [f64; 3], ws: &mut Workspace) -> Grad {
         // Every register is written before it is read: no clearing.
         let m = &mut ws.point_duals;
@@ -109,7 +109,7 @@ impl Tape {
 
     /// F over `b` and its derivative along every direction in `v`, the
     /// same bits as the reference interpreter's
-    /// [`crate::eval::Evaluator::interval_dir`].
+    /// [`crate::eval::Single::interval_dir`].
     pub fn interval_dir(
         &self,
         b: [Interval; 3],
@@ -121,7 +121,7 @@ impl Tape {
     }
 
     /// F over `b` and its three partials, the same bits as the reference
-    /// interpreter's [`crate::eval::Evaluator::interval_grad`].
+    /// interpreter's [`crate::eval::Single::interval_grad`].
     pub fn interval_grad(&self, b: [Interval; 3], ws: &mut Workspace) -> IntervalGrad {
         let (o, z) = (Interval::point(1.0), Interval::point(0.0));
         let (v, d) = self.duals(b, [[o, z, z], [z, o, z], [z, z, o]], &mut ws.grad);

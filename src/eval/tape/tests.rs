@@ -2,7 +2,7 @@
 //! bits, and pruned tapes keep them on their boxes.
 
 use super::*;
-use crate::eval::Evaluator;
+use crate::eval::Single;
 use crate::eval::interp::Interpreter;
 use crate::ir::passes::simplify;
 use crate::ir::random::{Rng, random_function};

@@ -129,7 +129,7 @@ impl<'a> Context<'a> {
     }
 
     /// What evaluates object `k` over `b` and at the points of `b` with
-    /// one function (see [`Evaluator::answering`]), for formulas that
+    /// one function (see [`Specialise::answering`]), for formulas that
     /// combine values from several evaluations.
     pub(crate) fn answering(&self, k: usize, b: &IBox) -> &dyn Evaluator {
         let e = self.evals[k].as_ref();
@@ -143,7 +143,7 @@ impl<'a> Context<'a> {
     }
 
     /// F and its derivative along `v` over `b` (see
-    /// [`Evaluator::interval_dir`]).
+    /// [`Single::interval_dir`]).
     pub(crate) fn interval_dir(
         &self,
         k: usize,

@@ -43,7 +43,7 @@ pub(crate) fn centred(
     st: &mut RenderStats,
 ) -> Centred {
     // F at the midpoint and dF/dt over the piece from one function (see
-    // `Evaluator::answering`).
+    // `Specialise::answering`).
     let e = ctx.answering(k, &bx);
     st.interval_evals += 1;
     let [_, dfdt] = e.interval_dir(bx, ray.d);

@@ -113,7 +113,7 @@ pub(crate) fn sign_bound(
 
 /// The mean-value form of `e` over the finite box `b`, with the centre's
 /// value and the gradient from one function (see
-/// [`Evaluator::answering`]); `None` where a bound is not finite.
+/// [`Specialise::answering`]); `None` where a bound is not finite.
 fn mean_value_form(e: &dyn Evaluator, b: IBox, stats: &mut RenderStats) -> Option<Interval> {
     let c: [f64; 3] = b.map(|i| i.mid());
     stats.interval_evals += 2;

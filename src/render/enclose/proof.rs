@@ -116,7 +116,7 @@ impl SignBound {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::eval::Evaluator;
+    use crate::eval::Single;
     use crate::eval::interp::Interpreter;
     use crate::ir::{Builder, UnaryOp, Var};
 

@@ -12,7 +12,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::eval::Evaluator;
+use crate::eval::{Evaluator, Single};
 use crate::render::aa::{self, Aa, AaError, Beside, Sampling, TileEdges};
 use crate::render::context::stats::RenderStats;
 use crate::render::frame::assemble::assemble;

@@ -1,7 +1,7 @@
 //! Tests of `render::ray`.
 
 use super::*;
-use crate::eval::{Evaluator, Grad, IntervalGrad};
+use crate::eval::{Bulk, Evaluator, Grad, IntervalGrad, Single, Specialise};
 use crate::interval::boxes::point_box;
 use std::sync::Arc;
 
@@ -13,7 +13,7 @@ struct OfX {
     dfi: fn(Interval) -> Interval,
 }
 
-impl Evaluator for OfX {
+impl Single for OfX {
     fn point(&self, p: [f64; 3]) -> f64 {
         (self.f)(p[0])
     }
@@ -34,6 +34,10 @@ impl Evaluator for OfX {
         }
     }
 }
+
+impl Bulk for OfX {}
+
+impl Specialise for OfX {}
 
 // Traces the ray x = -2 + t (t in [0, 4]) through `e`.
 fn trace(e: OfX) -> (Option<Hit>, RenderStats, f64) {
