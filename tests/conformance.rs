@@ -13,7 +13,7 @@ use std::sync::Arc;
 use ibeam::eval::Evaluator;
 use ibeam::eval::interp::Interpreter;
 use ibeam::eval::jit::JitEvaluator;
-use ibeam::eval::regional::Regional;
+use ibeam::eval::regional::{Parent, Regional};
 use ibeam::eval::tape::{Tape, Workspace};
 use ibeam::interval::Interval;
 use ibeam::ir::Function;
@@ -100,7 +100,7 @@ fn regional(f: &Function) -> Arc<dyn Evaluator> {
     Arc::new(Regional::new(
         REGION,
         pruned,
-        Arc::new(Interpreter::new(f.clone())),
+        Parent::Whole(Arc::new(Interpreter::new(f.clone()))),
     ))
 }
 

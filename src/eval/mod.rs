@@ -91,18 +91,6 @@ pub trait Specialise {
         None
     }
 
-    /// Where [`Specialise::function`] is exact, when that is not
-    /// everywhere (a function pruned to a region).
-    fn valid_region(&self) -> Option<[Interval; 3]> {
-        None
-    }
-
-    /// The evaluator a pruned one was pruned from, which answers outside
-    /// its [`Specialise::valid_region`].
-    fn parent(&self) -> Option<&std::sync::Arc<dyn Evaluator>> {
-        None
-    }
-
     /// The tape of a pruned evaluator (the renderer prunes it further).
     fn tape(&self) -> Option<&tape::Tape> {
         None
@@ -116,11 +104,6 @@ pub trait Specialise {
     /// sign, not in value, and such a formula over values from two of
     /// them would bound neither.
     fn answering(&self, _b: &[Interval; 3]) -> Option<&dyn Evaluator> {
-        None
-    }
-
-    /// The evaluator as a tree of pruned regions, if it is one.
-    fn as_regional(&self) -> Option<&regional::Regional> {
         None
     }
 

@@ -44,12 +44,34 @@ pub struct Regional {
     // Ops of the function `answer` evaluates.
     answer_len: usize,
     parent: Arc<dyn Evaluator>,
+    // The parent again, typed, when it is a region of the same tree.
+    parent_region: Option<Arc<Regional>>,
     children: Vec<Regional>,
+}
+
+/// What a region's evaluator falls back on outside its region.
+#[derive(Clone)]
+pub enum Parent {
+    /// The whole function's evaluator (or any evaluator not a region).
+    Whole(Arc<dyn Evaluator>),
+    /// A larger region of the same function.
+    Region(Arc<Regional>),
+}
+
+impl Parent {
+    /// The parent as an evaluator, and as a region when it is one.
+    fn split(self) -> (Arc<dyn Evaluator>, Option<Arc<Regional>>) {
+        match self {
+            Parent::Whole(e) => (e, None),
+            Parent::Region(r) => (Arc::clone(&r) as Arc<dyn Evaluator>, Some(r)),
+        }
+    }
 }
 
 impl Regional {
     /// `tape` (exact on `region`) with `parent` answering outside it.
-    pub fn new(region: IBox, tape: Tape, parent: Arc<dyn Evaluator>) -> Regional {
+    pub fn new(region: IBox, tape: Tape, parent: Parent) -> Regional {
+        let (parent, parent_region) = parent.split();
         let tape = Arc::new(TapeEvaluator::new(tape));
         Regional {
             region,
@@ -58,6 +80,7 @@ impl Regional {
             answer_len: tape.tape().len(),
             tape,
             parent,
+            parent_region,
             children: Vec::new(),
         }
     }
@@ -69,8 +92,9 @@ impl Regional {
         region: IBox,
         tape: Tape,
         (answer, answer_len): (Arc<dyn Evaluator>, usize),
-        parent: Arc<dyn Evaluator>,
+        parent: Parent,
     ) -> Regional {
+        let (parent, parent_region) = parent.split();
         Regional {
             region,
             tape: Arc::new(TapeEvaluator::new(tape)),
@@ -78,6 +102,7 @@ impl Regional {
             own: false,
             answer_len,
             parent,
+            parent_region,
             children: Vec::new(),
         }
     }
@@ -89,8 +114,9 @@ impl Regional {
         region: IBox,
         tape: Arc<TapeEvaluator>,
         (answer, answer_len): (Arc<dyn Evaluator>, usize),
-        parent: Arc<dyn Evaluator>,
+        parent: Parent,
     ) -> Regional {
+        let (parent, parent_region) = parent.split();
         Regional {
             region,
             tape,
@@ -98,8 +124,28 @@ impl Regional {
             own: false,
             answer_len,
             parent,
+            parent_region,
             children: Vec::new(),
         }
+    }
+
+    /// The region this one was pruned from, when it is one (typed, so that
+    /// pruning walks up a tree without asking an evaluator what it is).
+    pub fn parent_region(&self) -> Option<&Arc<Regional>> {
+        self.parent_region.as_ref()
+    }
+
+    /// The evaluator this region falls back on outside it.
+    pub fn parent_evaluator(&self) -> &Arc<dyn Evaluator> {
+        &self.parent
+    }
+
+    /// `out[i]` = F over `boxes[i]` on this region's own pruned tape, even
+    /// where the region lets another evaluator answer: a batch over a
+    /// short tape costs a fraction of one over the whole function, and is
+    /// exact wherever the boxes lie in the region.
+    pub fn own_interval_batch(&self, boxes: &[IBox], out: &mut [Interval]) {
+        crate::eval::tape::with_workspace(|ws| self.pruned_tape().interval_batch(boxes, out, ws));
     }
 
     /// The same region with these sub-regions (each inside it, exact on
@@ -276,7 +322,7 @@ impl Bulk for Regional {
 }
 
 impl Specialise for Regional {
-    /// The pruned function (exact on [`Specialise::valid_region`]).
+    /// The pruned function (exact on `Regional::region`).
     fn function(&self) -> Option<&Function> {
         Some(self.tape.tape().function())
     }
@@ -285,24 +331,12 @@ impl Specialise for Regional {
         Some(self.tape.tape())
     }
 
-    fn valid_region(&self) -> Option<IBox> {
-        Some(self.region)
-    }
-
-    fn parent(&self) -> Option<&Arc<dyn Evaluator>> {
-        Some(&self.parent)
-    }
-
     fn is_native(&self) -> bool {
         self.answer.is_native()
     }
 
     fn derivatives_native(&self) -> bool {
         !self.own && self.answer.derivatives_native()
-    }
-
-    fn as_regional(&self) -> Option<&Regional> {
-        Some(self)
     }
 
     fn answering(&self, b: &[Interval; 3]) -> Option<&dyn Evaluator> {
@@ -356,7 +390,7 @@ mod tests {
             let Some(p) = whole.prune(region, &mut ws) else {
                 continue;
             };
-            let r = Regional::new(region, p.tape, Arc::new(Interpreter::new(f)));
+            let r = Regional::new(region, p.tape, Parent::Whole(Arc::new(Interpreter::new(f))));
             for spread in [0.2, 2.0] {
                 let pts: Vec<[f64; 3]> = (0..9)
                     .map(|_| {

@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
+use crate::eval::regional::Regional;
 use crate::eval::{Evaluator, Grad, IntervalGrad};
 use crate::interval::Interval;
 use crate::interval::boxes::IBox;
@@ -29,6 +30,9 @@ pub(crate) struct EvalSet {
     pub evals: Vec<Arc<dyn Evaluator>>,
     /// Live ops of each evaluator's function.
     pub live_ops: Vec<usize>,
+    /// Each evaluator again, typed, where it is a region of a tree pruned
+    /// from the object's function (what pruning further starts from).
+    pub regions: Vec<Option<Arc<Regional>>>,
 }
 
 /// The read-only evaluation context of one render (or of a region of it,
@@ -39,6 +43,9 @@ pub(crate) struct Context<'a> {
     pub cam: RayCamera,
     /// One evaluator per object.
     pub evals: &'a [Arc<dyn Evaluator>],
+    /// Those evaluators that are regions of pruned trees, typed (empty:
+    /// none is).
+    pub regions: &'a [Option<Arc<Regional>>],
     /// Each object's linear colour.
     pub colors: Vec<[f64; 3]>,
     /// The scene's lights.
@@ -82,6 +89,7 @@ impl<'a> Context<'a> {
         Context {
             cam,
             evals,
+            regions: &[],
             colors: scene.objects.iter().map(|o| o.color).collect(),
             lights: &scene.lights,
             bounds: b,
@@ -106,20 +114,22 @@ impl<'a> Context<'a> {
 
     /// The same context with other evaluators (pruned ones) and their live
     /// op counts.
-    pub(crate) fn with_evals<'b>(
-        &self,
-        evals: &'b [Arc<dyn Evaluator>],
-        live_ops: Vec<usize>,
-    ) -> Context<'b>
+    pub(crate) fn with_evals<'b>(&self, set: &'b EvalSet) -> Context<'b>
     where
         'a: 'b,
     {
         Context {
-            evals,
+            evals: &set.evals,
+            regions: &set.regions,
             colors: self.colors.clone(),
-            live_ops,
+            live_ops: set.live_ops.clone(),
             ..*self
         }
+    }
+
+    /// Object `k`'s evaluator as a region of a pruned tree, if it is one.
+    pub(crate) fn region_of(&self, k: usize) -> Option<&Arc<Regional>> {
+        self.regions.get(k)?.as_ref()
     }
 
     /// Object `k` over `b`.
@@ -212,24 +222,30 @@ impl<'a> Context<'a> {
     // place of the object's own; `None` when it replaces none.
     pub(crate) fn replace_evals(
         &self,
-        mut replace: impl FnMut(usize, &Arc<dyn Evaluator>) -> Option<(Arc<dyn Evaluator>, usize)>,
+        mut replace: impl FnMut(usize, &Arc<dyn Evaluator>) -> Option<(Arc<Regional>, usize)>,
     ) -> Option<EvalSet> {
         let mut any = false;
         let mut live = self.live_ops.clone();
         let mut evals = Vec::with_capacity(self.evals.len());
+        let mut regions = Vec::with_capacity(self.evals.len());
         for (k, e) in self.evals.iter().enumerate() {
             match replace(k, e) {
                 Some((p, n)) => {
                     any = true;
                     live[k] = n;
-                    evals.push(p);
+                    evals.push(Arc::clone(&p) as Arc<dyn Evaluator>);
+                    regions.push(Some(p));
                 }
-                None => evals.push(Arc::clone(e)),
+                None => {
+                    evals.push(Arc::clone(e));
+                    regions.push(self.region_of(k).cloned());
+                }
             }
         }
         any.then_some(EvalSet {
             evals,
             live_ops: live,
+            regions,
         })
     }
 }
@@ -282,6 +298,7 @@ impl<'a> Context<'a> {
         Context {
             cam: RayCamera::new(&crate::scene::Camera::default(), size, size).unwrap(),
             evals,
+            regions: &[],
             colors: vec![[1.0; 3]; evals.len()],
             lights,
             bounds: Bounds::default(),
@@ -302,6 +319,7 @@ impl Context<'static> {
         Context {
             cam: RayCamera::new(camera, size, size).unwrap(),
             evals: &[],
+            regions: &[],
             colors: vec![],
             lights: &[],
             bounds: Bounds {

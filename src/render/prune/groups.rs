@@ -25,7 +25,6 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock, TryLockError};
 
-use crate::eval::Evaluator;
 use crate::eval::regional::Regional;
 use crate::eval::tape::Tape;
 use crate::interval::Interval;
@@ -195,9 +194,9 @@ fn build(
     let region = tr.ctx.beam_region(xs, ys, t)?;
     let evals = tr.pruned_group(xs, ys, t, pre, st)?;
     let beams = tile_beams(tr, (x0, y0), (x1, y1));
-    let empty = empty_tiles(&evals.evals, &beams, st);
+    let empty = empty_tiles(&evals, &beams, st);
     let tiles = if tr.ctx.flat {
-        tile_tapes(tr, &evals.evals, &beams, &empty, st)
+        tile_tapes(tr, &evals, &beams, &empty, st)
     } else {
         Vec::new()
     };
@@ -235,11 +234,11 @@ fn row_tapes(tr: &Scope<'_>, gy: u32, st: &mut TileState) -> Vec<Option<TileTape
             at.push(gx as usize);
         }
     }
-    let tapes: Vec<Option<&Tape>> = (tr.ctx.evals.iter().enumerate())
-        .map(|(k, e)| {
+    let tapes: Vec<Option<&Tape>> = (0..tr.ctx.evals.len())
+        .map(|k| {
             tr.pruner.tapes[k]
                 .as_deref()
-                .filter(|_| tr.ctx.live_ops[k] >= PRUNE_MIN_OPS && e.as_regional().is_none())
+                .filter(|_| tr.ctx.live_ops[k] >= PRUNE_MIN_OPS && tr.ctx.region_of(k).is_none())
         })
         .collect();
     let mut row: Vec<Option<TileTapes>> = vec![None; groups as usize];
@@ -288,7 +287,7 @@ fn tile_slot(x: u32, y: u32) -> usize {
 // prunes on its own.
 fn tile_tapes(
     tr: &Scope<'_>,
-    evals: &[Arc<dyn Evaluator>],
+    evals: &EvalSet,
     beams: &[TileBeam],
     empty: &[bool],
     st: &mut TileState,
@@ -298,8 +297,8 @@ fn tile_tapes(
         .filter(|&&(slot, ..)| !empty[slot])
         .filter_map(|(slot, corners, t)| Some((*slot, tr.ctx.corner_region(corners, *t)?)))
         .unzip();
-    let tapes: Vec<Option<&Tape>> = (evals.iter())
-        .map(|e| e.as_regional().map(Regional::pruned_tape))
+    let tapes: Vec<Option<&Tape>> = (evals.regions.iter())
+        .map(|r| r.as_deref().map(Regional::pruned_tape))
         .collect();
     let mut tiles: Vec<Option<Arc<TileTapes>>> = vec![None; n];
     for (slot, pruned) in at.into_iter().zip(pruned_to_each(&tapes, &regions, st)) {
@@ -320,7 +319,7 @@ fn tile_tapes(
 // group's tiles: a megapixel's 1024 tiles cost about what 64 single
 // tapes' passes do, where pruning each empty tile cost a pass over its
 // group's tape, and its rays and shading a pass over its pixels.
-fn empty_tiles(evals: &[Arc<dyn Evaluator>], beams: &[TileBeam], st: &mut TileState) -> Vec<bool> {
+fn empty_tiles(evals: &EvalSet, beams: &[TileBeam], st: &mut TileState) -> Vec<bool> {
     let n = (GROUP_TILES * GROUP_TILES) as usize;
     let (at, boxes): (Vec<usize>, Vec<IBox>) = (beams.iter())
         .map(|(slot, corners, t)| (*slot, corners.hull(*t)))
@@ -331,22 +330,20 @@ fn empty_tiles(evals: &[Arc<dyn Evaluator>], beams: &[TileBeam], st: &mut TileSt
     }
     let mut clear = vec![true; boxes.len()];
     let mut f = vec![Interval::point(0.0); boxes.len()];
-    for e in evals {
+    for (e, region) in evals.evals.iter().zip(&evals.regions) {
         // A group's own tape, even where it is not short enough to answer
         // for the group (it then delegates to native code of the whole
         // function): one batch over it costs a fraction of the whole
         // function's.
-        match e.as_regional() {
-            Some(r) => crate::eval::tape::with_workspace(|ws| {
-                r.pruned_tape().interval_batch(&boxes, &mut f, ws)
-            }),
+        match region {
+            Some(r) => r.own_interval_batch(&boxes, &mut f),
             None => e.interval_batch(&boxes, &mut f),
         }
         for (c, v) in clear.iter_mut().zip(&f) {
             *c &= crate::render::enclose::proof::holds_no_surface(*v);
         }
     }
-    st.stats.interval_evals += (boxes.len() * evals.len()) as u64;
+    st.stats.interval_evals += (boxes.len() * evals.evals.len()) as u64;
     for (&i, c) in at.iter().zip(clear) {
         empty[i] = c;
     }

@@ -6,7 +6,7 @@
 use std::sync::Arc;
 
 use crate::eval::Evaluator;
-use crate::eval::regional::Regional;
+use crate::eval::regional::{Parent, Regional};
 use crate::eval::tape::{Tape, Workspace};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_within};
@@ -37,12 +37,12 @@ const PRUNE_GAIN_NATIVE: usize = 8;
 const PRUNE_GAIN_INTERPRETED: usize = 2;
 
 /// One object's pruned evaluator and its op count.
-type PrunedEval = (Arc<dyn Evaluator>, usize);
+type PrunedEval = (Arc<Regional>, usize);
 
 /// Where one pruning starts (see `Scope::prune_plan`).
 struct PrunePlan<'p> {
-    // The evaluator the pruned one falls back on outside its region.
-    source: &'p Arc<dyn Evaluator>,
+    // What the pruned one falls back on outside its region.
+    source: Parent,
     // The tape pruned.
     tape: &'p Tape,
     // What answers for the region now, and its length.
@@ -161,7 +161,7 @@ impl<'a> Scope<'a> {
         'a: 'b,
     {
         Scope {
-            ctx: self.ctx.with_evals(&set.evals, set.live_ops.clone()),
+            ctx: self.ctx.with_evals(set),
             pruner: self.pruner.clone(),
         }
     }
@@ -402,7 +402,7 @@ impl<'a> Scope<'a> {
         region: IBox,
         min_ops: usize,
         st: &mut TileState,
-    ) -> Option<(Arc<dyn Evaluator>, usize)> {
+    ) -> Option<PrunedEval> {
         let plan = self.prune_plan(k, e, region, min_ops)?;
         let p = plan
             .tape
@@ -421,21 +421,29 @@ impl<'a> Scope<'a> {
         region: IBox,
         min_ops: usize,
     ) -> Option<PrunePlan<'p>> {
-        let mut source = e;
-        while let (Some(r), Some(p)) = (source.valid_region(), source.parent()) {
-            if box_within(&region, &r) {
+        // Up the object's tree of regions (typed: see `Context::regions`)
+        // to the first that holds `region`; past the top, the evaluator
+        // the tree was pruned from.
+        let mut tree = self.ctx.region_of(k);
+        let mut whole = e;
+        while let Some(t) = tree {
+            if box_within(&region, &t.region()) {
                 break;
             }
-            source = p;
+            tree = t.parent_region();
+            if tree.is_none() {
+                whole = t.parent_evaluator();
+            }
         }
-        let (tape, answer, before) = match source.as_regional() {
-            Some(tree) => {
-                let node = tree.smallest_holding(&region);
-                (node.pruned_tape(), node.answer(), node.answer_len())
+        let (source, tape, answer, before) = match tree {
+            Some(t) => {
+                let node = t.smallest_holding(&region);
+                let source = Parent::Region(Arc::clone(t));
+                (source, node.pruned_tape(), node.answer(), node.answer_len())
             }
             None => {
                 let tape = self.pruner.tapes[k].as_deref()?;
-                (tape, source, tape.len())
+                (Parent::Whole(Arc::clone(whole)), tape, whole, tape.len())
             }
         };
         // Along rays, only interpreted tapes are pruned: native code of a
@@ -467,17 +475,17 @@ impl<'a> Scope<'a> {
         region: IBox,
         p: crate::eval::tape::PrunedTape,
         st: &mut TileState,
-    ) -> (Arc<dyn Evaluator>, usize) {
+    ) -> PrunedEval {
         let after = p.tape.len();
         let pruned = if after * plan.gain <= plan.before {
             st.stats.pruned_ops_before += plan.before as u64;
             st.stats.pruned_ops_after += after as u64;
-            Regional::new(region, p.tape, Arc::clone(plan.source))
+            Regional::new(region, p.tape, plan.source.clone())
         } else {
             let answer = (Arc::clone(plan.answer), plan.before);
-            Regional::delegating(region, p.tape, answer, Arc::clone(plan.source))
+            Regional::delegating(region, p.tape, answer, plan.source.clone())
         };
-        (Arc::new(pruned) as Arc<dyn Evaluator>, after)
+        (Arc::new(pruned), after)
     }
 }
 

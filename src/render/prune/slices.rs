@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use super::groups::TileTapes;
 use crate::eval::Evaluator;
-use crate::eval::regional::Regional;
+use crate::eval::regional::{Parent, Regional};
 use crate::eval::tape::Tape;
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_within};
@@ -136,13 +136,19 @@ impl Scope<'_> {
         st: &mut TileState,
     ) -> Option<EvalSet> {
         self.ctx.replace_evals(|k, e| match &self.pruner.tapes[k] {
-            Some(tape) if self.ctx.live_ops[k] >= PRUNE_MIN_OPS && e.as_regional().is_none() => {
-                let from = group.map(|g| &g.evals[k]);
-                let (parent, tape, above, tree) =
-                    match from.and_then(|g| Some((g, g.as_regional()?))) {
-                        Some((g, r)) => (g, r.pruned_tape(), (r.answer(), r.answer_len()), Some(r)),
-                        None => (e, &**tape, (e, tape.len()), None),
-                    };
+            Some(tape)
+                if self.ctx.live_ops[k] >= PRUNE_MIN_OPS && self.ctx.region_of(k).is_none() =>
+            {
+                let from = group.and_then(|g| g.regions[k].as_ref());
+                let (parent, tape, above, tree) = match from {
+                    Some(r) => (
+                        Parent::Region(Arc::clone(r)),
+                        r.pruned_tape(),
+                        (r.answer(), r.answer_len()),
+                        Some(&**r),
+                    ),
+                    None => (Parent::Whole(Arc::clone(e)), &**tape, (e, tape.len()), None),
+                };
                 let beam = Beam {
                     xs,
                     ys,
@@ -158,7 +164,7 @@ impl Scope<'_> {
                 let placed = beam.place(self, tape, t)?;
                 let tree = beam.node(self, tape, (t, placed), above, SLICE_DEPTH, st)?;
                 let n = tree.pruned_tape().len();
-                Some((Arc::new(tree) as Arc<dyn Evaluator>, n))
+                Some((Arc::new(tree), n))
             }
             _ => None,
         })
@@ -180,7 +186,8 @@ struct Beam<'e> {
     xs: (f64, f64),
     ys: (f64, f64),
     corners: CornerRays,
-    parent: &'e Arc<dyn Evaluator>,
+    // What the beam's regions fall back on outside them.
+    parent: Parent,
     // The tree of the group of tiles the beam lies in, whose regions a
     // region inside one of them may prune from.
     group: Option<&'e Regional>,
@@ -229,7 +236,7 @@ impl<'e> Beam<'e> {
             Some(h) if h.answer_len() < above.1 => (h.answer(), h.answer_len()),
             _ => above,
         };
-        let parent = Arc::clone(self.parent);
+        let parent = self.parent.clone();
         let node = match held {
             Some(h) if self.long(tr, t) => Regional::sharing(
                 region,

@@ -12,7 +12,7 @@ use super::probe::{Form, scene_signs};
 use super::refine::{Bracket, RefineScratch, refine, refine_batch};
 use crate::eval::Evaluator;
 use crate::eval::interp::Interpreter;
-use crate::eval::regional::Regional;
+use crate::eval::regional::{Parent, Regional};
 use crate::eval::tape::{Tape, Workspace};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, point_box};
@@ -70,8 +70,11 @@ fn region_and_whole() -> (IBox, Arc<dyn Evaluator>, Arc<dyn Evaluator>) {
         "pruned to {}",
         pruned.tape.len()
     );
-    let regional: Arc<dyn Evaluator> =
-        Arc::new(Regional::new(region, pruned.tape, Arc::clone(&whole)));
+    let regional: Arc<dyn Evaluator> = Arc::new(Regional::new(
+        region,
+        pruned.tape,
+        Parent::Whole(Arc::clone(&whole)),
+    ));
     (region, whole, regional)
 }
 
