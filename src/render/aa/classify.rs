@@ -300,7 +300,25 @@ impl Classified {
 
 /// Per pixel: mean linear colour, covered fraction and nearest hit of the
 /// sub-samples.
-pub(crate) type FineSamples<'a> = (&'a [[f64; 3]], &'a [f64], &'a [f64]);
+pub(crate) struct SplitSamples {
+    /// Mean linear colour.
+    pub linear: Vec<[f64; 3]>,
+    /// Covered fraction.
+    pub coverage: Vec<f64>,
+    /// Nearest hit.
+    pub depth: Vec<f64>,
+}
+
+impl SplitSamples {
+    /// No pixel split yet: black, uncovered, nothing hit, for `n` pixels.
+    pub(crate) fn none(n: usize) -> SplitSamples {
+        SplitSamples {
+            linear: vec![[0.0; 3]; n],
+            coverage: vec![0.0; n],
+            depth: vec![f64::INFINITY; n],
+        }
+    }
+}
 
 /// Folds the sub-samples of the split pixels (`fine`: per pixel the mean
 /// linear colour, covered fraction and nearest hit of its `per[k]`
@@ -308,15 +326,15 @@ pub(crate) type FineSamples<'a> = (&'a [[f64; 3]], &'a [f64], &'a [f64]);
 pub(crate) fn merge_split(
     px: &mut TilePixels<'_>,
     split: &[bool],
-    fine: Option<FineSamples<'_>>,
+    fine: Option<&SplitSamples>,
     per: &[u32],
     st: &mut RenderStats,
 ) {
     for k in 0..split.len() {
         let centre_hit = px.depth[k].is_finite();
         match fine {
-            Some((lin, cov, dep)) if split[k] => {
-                let (mut c, mut h) = (lin[k], cov[k]);
+            Some(fine) if split[k] => {
+                let (mut c, mut h) = (fine.linear[k], fine.coverage[k]);
                 let per = per[k];
                 let mut s = per;
                 if h == 0.0 && centre_hit {
@@ -330,7 +348,7 @@ pub(crate) fn merge_split(
                 }
                 px.linear[k] = c;
                 px.coverage[k] = h;
-                px.depth[k] = px.depth[k].min(dep[k]);
+                px.depth[k] = px.depth[k].min(fine.depth[k]);
                 px.samples[k] = s;
             }
             _ => {

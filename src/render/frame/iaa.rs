@@ -51,7 +51,12 @@ pub(super) fn anti_alias(
     };
     let edge = aa::shadow_edges((t.w, t.h), px.depth, px.shadowed, beside);
     c.mark_shadow_edges(edge, &mut st.stats);
-    let area = (t.x0, t.y0, t.w, t.h);
+    let area = TileArea {
+        x0: t.x0,
+        y0: t.y0,
+        w: t.w,
+        h: t.h,
+    };
     // Each split pixel is sampled at its own level (see `aa::Sampling`):
     // the pixels of one level are traced together on that level's image.
     let n = c.sampling.len();
@@ -80,30 +85,28 @@ pub(super) fn anti_alias(
         if !these.iter().any(|&s| s) {
             continue;
         }
-        let known = (c.floors.as_slice(), hints.as_slice(), c.brackets.as_slice());
-        let (lin, cov, dep) = trace_split(
-            fine_tr,
+        let job = SplitJob {
             opts,
             area,
-            (&these, known),
-            1 << l,
-            bg,
-            &mut st.stats,
-        );
-        let all =
-            sub.get_or_insert_with(|| (vec![[0.0; 3]; n], vec![0.0; n], vec![f64::INFINITY; n]));
+            split: &these,
+            facts: PixelFacts {
+                floors: &c.floors,
+                hints: &hints,
+                brackets: &c.brackets,
+            },
+            factor: 1 << l,
+            background: bg,
+        };
+        let traced = trace_split(fine_tr, job, &mut st.stats);
+        let all = sub.get_or_insert_with(|| SplitSamples::none(n));
         for k in (0..n).filter(|&k| these[k]) {
-            (all.0[k], all.1[k], all.2[k]) = (lin[k], cov[k], dep[k]);
+            all.linear[k] = traced.linear[k];
+            all.coverage[k] = traced.coverage[k];
+            all.depth[k] = traced.depth[k];
         }
     }
     let per: Vec<u32> = level.iter().map(|&l| 1 << (2 * l)).collect();
-    aa::merge_split(
-        &mut px,
-        &split,
-        sub.as_ref().map(|(l, c, d)| (&l[..], &c[..], &d[..])),
-        &per,
-        &mut st.stats,
-    );
+    aa::merge_split(&mut px, &split, sub.as_ref(), &per, &mut st.stats);
     st.stats.aa_cpu_ms += ms_since(t0);
     t.state = st;
 }

@@ -13,11 +13,12 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use crate::eval::{Evaluator, Single};
+use crate::render::aa::SplitSamples;
 use crate::render::aa::{self, Aa, AaError, Beside, Sampling, TileEdges};
 use crate::render::context::stats::RenderStats;
 use crate::render::frame::assemble::assemble;
 use crate::render::frame::band::{Band, FloatLayers, band};
-use crate::render::frame::subsample::{SplitSamples, downsample, trace_split};
+use crate::render::frame::subsample::{PixelFacts, SplitJob, TileArea, downsample, trace_split};
 use crate::render::prune::scope::Scope;
 use crate::render::prune::scope::TileState;
 use crate::render::tile::{ShadowHint, TileOut, TileSpec, ms_since, render_tile};

@@ -5,6 +5,7 @@
 use rayon::prelude::*;
 
 use crate::render::RenderOptions;
+use crate::render::aa::SplitSamples;
 use crate::render::context::stats::RenderStats;
 use crate::render::prune::scope::Scope;
 use crate::render::tile::{ShadowHint, TileOut, TileSpec, render_tile, squares};
@@ -63,14 +64,47 @@ pub(super) fn downsample(t: TileOut, s: u32) -> TileOut {
     }
 }
 
-/// Per pixel of a tile: the mean linear colour, covered fraction and
-/// nearest hit of its sub-samples.
-pub(super) type SplitSamples = (Vec<[f64; 3]>, Vec<f64>, Vec<f64>);
-
 /// What a tile's pixel-area tests proved for the sub-samples of each
-/// pixel (row-major): where its rays may start, the shadow state they may
-/// reuse, and the bracket of their first roots.
-pub(super) type PixelFacts<'a> = (&'a [Floor], &'a [ShadowHint], &'a [Option<RootBracket>]);
+/// pixel (row-major).
+#[derive(Copy, Clone)]
+pub(super) struct PixelFacts<'a> {
+    /// Where each pixel's rays may start (its area proven empty before).
+    pub floors: &'a [Floor],
+    /// The shadow state each pixel's sub-samples may reuse.
+    pub hints: &'a [ShadowHint],
+    /// The bracket of each pixel's first roots, where its area's beam was
+    /// included.
+    pub brackets: &'a [Option<RootBracket>],
+}
+
+/// The split pixels of one tile to trace at one finer resolution.
+pub(super) struct SplitJob<'a> {
+    /// The render's options.
+    pub opts: &'a RenderOptions,
+    /// The tile: its left column, top row, width and height.
+    pub area: TileArea,
+    /// Per pixel of the tile: whether it is traced at this resolution.
+    pub split: &'a [bool],
+    /// What the pixel-area tests proved for each pixel.
+    pub facts: PixelFacts<'a>,
+    /// Sub-samples a pixel side.
+    pub factor: u32,
+    /// The background colour, linear.
+    pub background: [f64; 3],
+}
+
+/// A tile's place in the image, in pixels.
+#[derive(Copy, Clone, Debug)]
+pub(super) struct TileArea {
+    /// Left column.
+    pub x0: u32,
+    /// Top row.
+    pub y0: u32,
+    /// Width.
+    pub w: u32,
+    /// Height.
+    pub h: u32,
+}
 
 /// Side, in pixels, of the squares of a tile whose split pixels are traced
 /// together at the fine resolution. A fine tile spans only squares that
@@ -78,24 +112,28 @@ pub(super) type PixelFacts<'a> = (&'a [Floor], &'a [ShadowHint], &'a [Option<Roo
 /// a whole tile cost more than tracing its few split pixels.
 const FINE_GROUP: u32 = 2;
 
-// The sub-samples of a tile's split pixels (`split`, with the ray
-// parameter each pixel's area was proven empty up to in `floors`, the
-// shadow state its sub-samples may reuse in `hints`, and the bracket of
-// its sub-samples' first roots, where its area's beam was included, in
-// `brackets`),
-// traced with `fine` at `f`× the resolution, square by square of
-// `FINE_GROUP` pixels, other sub-samples masked out: per pixel of the
-// tile (`area`: x0, y0, w, h) the mean linear colour, covered fraction
-// and nearest hit of its sub-samples (zero, zero, +inf where not split).
+// The sub-samples of the job's split pixels, traced with `fine` at the
+// job's factor × the resolution, square by square of `FINE_GROUP` pixels,
+// other sub-samples masked out: per pixel of the tile the mean linear
+// colour, covered fraction and nearest hit of its sub-samples (zero,
+// zero, +inf where not split).
 pub(super) fn trace_split(
     fine: &Scope<'_>,
-    opts: &RenderOptions,
-    (x0, y0, w, h): (u32, u32, u32, u32),
-    (split, (floors, hints, brackets)): (&[bool], PixelFacts<'_>),
-    f: u32,
-    bg: [f64; 3],
+    job: SplitJob<'_>,
     stats: &mut RenderStats,
 ) -> SplitSamples {
+    let SplitJob {
+        opts,
+        area: TileArea { x0, y0, w, h },
+        split,
+        facts: PixelFacts {
+            floors,
+            hints,
+            brackets,
+        },
+        factor: f,
+        background: bg,
+    } = job;
     let n = (w * h) as usize;
     let mut linear = vec![[0.0; 3]; n];
     let mut coverage = vec![0.0; n];
@@ -157,5 +195,9 @@ pub(super) fn trace_split(
             depth[k] = out.depth[q];
         }
     }
-    (linear, coverage, depth)
+    SplitSamples {
+        linear,
+        coverage,
+        depth,
+    }
 }

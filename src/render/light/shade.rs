@@ -252,9 +252,34 @@ pub(crate) fn mend_singular_normals(
 /// vector met with it (a parallel camera's is every pixel's). Each is the
 /// same bits as computing it again; two square roots and two divisions a
 /// light and pixel were most of shading a hit.
+///
+/// With [`LightMemo::with_blockers`] it also keeps, per light, where the
+/// last shadowed point's segment met a solid, which the next point's
+/// segment tries first (see `shadow::point_segment_free`).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct LightMemo {
     lights: Vec<Memo>,
+    blockers: Vec<Option<f64>>,
+}
+
+impl LightMemo {
+    /// A memo that also keeps the blockers of `lights` lights.
+    pub(crate) fn with_blockers(lights: usize) -> LightMemo {
+        LightMemo {
+            lights: Vec::new(),
+            blockers: vec![None; lights],
+        }
+    }
+}
+
+/// What is already known of a point's shadows before its segments are
+/// traced.
+#[derive(Copy, Clone, Debug, Default)]
+pub(crate) struct KnownShadows<'a> {
+    /// Per light: a shadow beam proved it visible.
+    pub lit_by_beam: &'a [bool],
+    /// The shadowed lights (bit l) of a nearby sample this point takes.
+    pub known: Option<u64>,
 }
 
 #[derive(Copy, Clone, Debug, Default)]
@@ -265,17 +290,18 @@ struct Memo {
     half: Option<([u64; 3], Option<DVec3>)>,
 }
 
-/// Shades one surface point; `lit_by_beam[l]` says a shadow beam already
-/// proved light l visible. Also returns which lights (bit l) face the
-/// point but are shadowed there, for anti-aliasing to find shadow edges.
-/// `blockers` and `memo` carry what one point leaves for the next.
+/// Shades one surface point, given what is `known` of its shadows. Also
+/// returns which lights (bit l) face the point but are shadowed there,
+/// for anti-aliasing to find shadow edges. `memo` carries what one point
+/// leaves for the next.
 pub(crate) fn shade(
     tr: &Scope<'_>,
     s: &Surf,
-    (lit_by_beam, known): (&[bool], Option<u64>),
-    (blockers, memo): (&mut [Option<f64>], &mut LightMemo),
+    known: KnownShadows<'_>,
+    memo: &mut LightMemo,
     st: &mut TileState,
 ) -> (DVec3, u64) {
+    let KnownShadows { lit_by_beam, known } = known;
     let mut c = s.color * AMBIENT;
     let mut shadowed = 0u64;
     if memo.lights.len() < tr.ctx.lights.len() {
@@ -304,9 +330,9 @@ pub(crate) fn shade(
             }
         } else if light.shadows && !lit_by_beam.get(li).copied().unwrap_or(false) {
             st.stats.shadow_rays += 1;
-            let blocker = blockers.get(li).copied().flatten();
+            let blocker = memo.blockers.get(li).copied().flatten();
             let (free, found) = point_segment_free(tr, s.q, end, s.min_w, blocker, st);
-            if let Some(b) = blockers.get_mut(li) {
+            if let Some(b) = memo.blockers.get_mut(li) {
                 *b = found.or(*b);
             }
             if !free {
@@ -405,7 +431,11 @@ mod tests {
                 };
                 let mut st = TileState::default();
                 let memo = &mut LightMemo::default();
-                let (c, _) = shade(&tr, &surf, (&[true, true], None), (&mut [], memo), &mut st);
+                let known = KnownShadows {
+                    lit_by_beam: &[true, true],
+                    known: None,
+                };
+                let (c, _) = shade(&tr, &surf, known, memo, &mut st);
                 for ch in 0..3 {
                     assert!(
                         ci[ch].lo - 1e-12 <= c[ch] && c[ch] <= ci[ch].hi + 1e-12,

@@ -24,7 +24,7 @@ use glam::DVec3;
 
 mod shading;
 use crate::render::enclose::monotone;
-use shading::{CutFaces, class_color, shade_pixels, shadow_beams};
+use shading::{CutFaces, PixelShadows, class_color, shade_pixels, shadow_beams};
 
 /// Which pixels of the traced image a tile covers.
 #[derive(Copy, Clone, Debug)]
@@ -169,14 +169,11 @@ pub(crate) fn render_tile(
     st.stats.shade_cpu_ms += ms_since(t_shade);
     let known = known_shadows(&spec, &tile);
     let lit_by_beam = shadow_beams(tr, &tile, &surfs, &known, &mut st);
-    let mut lit = shade_pixels(
-        tr,
-        &surfs,
-        (&lit_by_beam, &known),
-        background,
-        opts,
-        &mut st,
-    );
+    let shadows = PixelShadows {
+        lit_by_beam: &lit_by_beam,
+        known: &known,
+    };
+    let mut lit = shade_pixels(tr, &surfs, shadows, background, opts, &mut st);
     if let Some(cut) = cut {
         let t_cut = Instant::now();
         cut.paint(tr, &tile, &mut lit, &mut st);

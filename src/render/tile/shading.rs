@@ -2,6 +2,7 @@
 //! pixel shaded, with cut faces and singular normals handled.
 
 use super::*;
+use crate::render::light::shade::KnownShadows;
 
 // Shadow beams over the included blocks: row-major per pixel and light,
 // whether one beam proved the pixel lit. Pixels whose shadow state is
@@ -103,7 +104,7 @@ impl CutFaces {
             let (c, shadowed, n) = *self.shaded[h.obj].get_or_insert_with(|| {
                 let s = shade::surface(tr, &tile.ray(k), &h, &mut st.stats);
                 let memo = &mut shade::LightMemo::default();
-                let (c, shadowed) = shade::shade(tr, &s, (&[], None), (&mut [], memo), st);
+                let (c, shadowed) = shade::shade(tr, &s, KnownShadows::default(), memo, st);
                 (c, shadowed, s.n)
             });
             lit.linear[k] = c.to_array();
@@ -115,16 +116,27 @@ impl CutFaces {
     }
 }
 
+/// What is known of a tile's shadows before its pixels' segments.
+pub(super) struct PixelShadows<'a> {
+    /// Per pixel and light (`nl` a pixel): a shadow beam proved the light
+    /// visible.
+    pub lit_by_beam: &'a [bool],
+    /// Per pixel (empty: none): the shadowed lights of a nearby sample it
+    /// takes.
+    pub known: &'a [Option<u64>],
+}
+
 // Lights every hit (the background elsewhere), with per-pixel shadow
 // segments for the lights no shadow beam settled.
 pub(super) fn shade_pixels(
     tr: &Scope<'_>,
     surfs: &TileSurfs,
-    (lit_by_beam, known): (&[bool], &[Option<u64>]),
+    known: PixelShadows<'_>,
     background: [f64; 3],
     opts: &RenderOptions,
     ts: &mut TileState,
 ) -> Lit {
+    let PixelShadows { lit_by_beam, known } = known;
     let t_shade = Instant::now();
     let (n, nl) = (surfs.len(), tr.ctx.lights.len());
     let mut linear = vec![background; n];
@@ -136,18 +148,17 @@ pub(super) fn shade_pixels(
     let any_shadows = tr.ctx.lights.iter().any(|l| l.shadows);
     // Per light, where the last shadowed sample's segment met a solid
     // (see `shadow::point_segment_free`).
-    let mut blockers = vec![None; nl];
-    let mut memo = shade::LightMemo::default();
+    let mut memo = shade::LightMemo::with_blockers(nl);
     for (k, s) in surfs.iter() {
         let t0 = any_shadows.then(Instant::now);
         let (c, sh) = shade::shade(
             tr,
             s,
-            (
-                &lit_by_beam[k * nl..(k + 1) * nl],
-                known.get(k).copied().flatten(),
-            ),
-            (&mut blockers, &mut memo),
+            KnownShadows {
+                lit_by_beam: &lit_by_beam[k * nl..(k + 1) * nl],
+                known: known.get(k).copied().flatten(),
+            },
+            &mut memo,
             ts,
         );
         shadow_ms += t0.map_or(0.0, ms_since);

@@ -85,7 +85,7 @@ fn cut_faces_lit_once_per_object_match_each_pixels_own_lighting() {
         let mut st = TileState::default();
         let s = shade::surface(&tr, &ray, &hit, &mut st.stats);
         let memo = &mut shade::LightMemo::default();
-        let (c, shadowed) = shade::shade(&tr, &s, (&[], None), (&mut [], memo), &mut st);
+        let (c, shadowed) = shade::shade(&tr, &s, shade::KnownShadows::default(), memo, &mut st);
         assert_eq!(
             out.linear[k].map(f64::to_bits),
             c.to_array().map(f64::to_bits)
