@@ -5,7 +5,7 @@ use super::classify::*;
 use super::*;
 use crate::render::enclose::monotone::decreasing_along;
 
-pub(super) struct Ctx<'t, 'a> {
+pub(super) struct PixelAreas<'t, 'a> {
     pub(super) tr: &'t Scope<'a>,
     /// Every object: a cell's beam tests consider them all.
     pub(super) all: Vec<u32>,
@@ -17,18 +17,18 @@ pub(super) struct Ctx<'t, 'a> {
     pub(super) corners: RayGrid,
 }
 
-impl Ctx<'_, '_> {
+impl PixelAreas<'_, '_> {
     // A block of whole pixels (tile coordinates, half-open).
     pub(super) fn block(
         &self,
         c: &mut Classified,
         b: Rect,
-        (floor, inherited): (Floor, Option<RootBracket>),
+        (floor, inherited): (EmptyPrefix, Option<RootBracket>),
         st: &mut TileState,
     ) {
         // Only a pixel is sampled by what the covered test finds: larger
         // cells skip it.
-        let d = self.test(b, (floor, inherited), b.is_pixel(), st);
+        let d = self.decide(b, (floor, inherited), b.is_pixel(), st);
         match d.cell {
             Cell::Background => {
                 for p in b.pixels() {
@@ -72,10 +72,10 @@ impl Ctx<'_, '_> {
     // Some; the covered test too where `cover` asks for it.
     // long-fn: the pixel-area tests in the order they run (reject, include,
     // colour, cover), each reading the previous one's bracket.
-    pub(super) fn test(
+    pub(super) fn decide(
         &self,
         b: Rect,
-        (floor, inherited): (Floor, Option<RootBracket>),
+        (floor, inherited): (EmptyPrefix, Option<RootBracket>),
         cover: bool,
         st: &mut TileState,
     ) -> Decision {
@@ -103,15 +103,21 @@ impl Ctx<'_, '_> {
         // None when the piece lies wholly outside them.
         let eval_min = |t: Interval, st: &mut TileState| -> Option<proof::SignBound> {
             let hb = box_meet(corners.hull(t), bounds)?;
-            Some(probe::scene_signs(tr, &self.all, hb, Form::Tight(0), st))
+            Some(probe::scene_signs(
+                tr,
+                &self.all,
+                hb,
+                SignForm::Tight(0),
+                st,
+            ))
         };
         let rejected = |t: Interval| eval_min(t, st).is_none_or(|f| f.positive());
         let near = floor.near_from(t0);
         let (ta, tb) = match probe::sweep(tr, probe::SweepRange { t0, near, t1 }, min_w, rejected) {
-            Sweep::Empty => return decide(Cell::Background, floor),
+            SweepOutcome::Empty => return decide(Cell::Background, floor),
             // Constant along the rays: no bracket to include.
-            Sweep::Flat => return decide(Cell::Split, floor),
-            Sweep::Candidate(ta, tb) => (ta, tb),
+            SweepOutcome::Flat => return decide(Cell::Split, floor),
+            SweepOutcome::Candidate(ta, tb) => (ta, tb),
         };
         // Inclusion: the unclipped cross-sections at ta (positive) and at
         // tb2 (negative), the piece between inside the bounds (so no ray
@@ -119,7 +125,7 @@ impl Ctx<'_, '_> {
         // strictly decreasing along every ray.
         let mut whole = |t: f64| {
             let hb = corners.hull(Interval::point(t));
-            probe::scene_signs(tr, &self.all, hb, Form::Natural, st)
+            probe::scene_signs(tr, &self.all, hb, SignForm::Natural, st)
         };
         let Some(tb2) = probe::bracket_end(
             (ta, tb),
@@ -137,7 +143,7 @@ impl Ctx<'_, '_> {
             return Decision {
                 covered: cover_bracket.is_some(),
                 bracket: cover_bracket.flatten(),
-                ..decide(Cell::Split, Floor { at: ta, near: tb })
+                ..decide(Cell::Split, EmptyPrefix { at: ta, near: tb })
             };
         };
         let (a, b) = self.narrow(&corners, &bounds, (ta, tb2), st);
@@ -160,7 +166,7 @@ impl Ctx<'_, '_> {
             } else {
                 Cell::Split
             },
-            floor: Floor { at: ta, near: tb },
+            floor: EmptyPrefix { at: ta, near: tb },
             by_shading: smooth == Some(false),
             covered: cover_bracket.is_some(),
             bracket: included.or(cover_bracket.flatten()),
@@ -177,7 +183,7 @@ impl Ctx<'_, '_> {
     pub(super) fn test_within(
         &self,
         corners: &CornerRays,
-        floor: Floor,
+        floor: EmptyPrefix,
         br: RootBracket,
         st: &mut TileState,
     ) -> Option<Decision> {
@@ -211,7 +217,7 @@ impl Ctx<'_, '_> {
         for _ in 0..NARROW_STEPS {
             let m = 0.5 * (a + b);
             let hb = corners.hull(Interval::point(m));
-            let fm = probe::scene_signs(tr, &self.all, hb, Form::Natural, st);
+            let fm = probe::scene_signs(tr, &self.all, hb, SignForm::Natural, st);
             if fm.positive() {
                 a = m;
             } else if fm.negative() {
@@ -222,7 +228,13 @@ impl Ctx<'_, '_> {
         }
         let mut skipped = || {
             let hb = box_meet(corners.hull(Interval::new(front, a)), *bounds)?;
-            Some(probe::scene_signs(tr, &self.all, hb, Form::Tight(0), st))
+            Some(probe::scene_signs(
+                tr,
+                &self.all,
+                hb,
+                SignForm::Tight(0),
+                st,
+            ))
         };
         if a > front && skipped().is_some_and(|f| !f.positive()) {
             a = front;

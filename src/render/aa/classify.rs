@@ -51,7 +51,7 @@ impl TileEdges {
 /// tiles of a row share their height and tiles of a column their width,
 /// so a neighbour's side lines up with the tile's.
 #[derive(Copy, Clone, Default)]
-pub(crate) struct Beside<'e> {
+pub(crate) struct NeighbourTiles<'e> {
     /// The tile above (its bottom row is read).
     pub above: Option<&'e TileEdges>,
     /// The tile below (its top row).
@@ -62,7 +62,7 @@ pub(crate) struct Beside<'e> {
     pub right: Option<&'e TileEdges>,
 }
 
-impl Beside<'_> {
+impl NeighbourTiles<'_> {
     // The base sample at tile coordinates (i, j) just outside a w×h tile.
     pub(super) fn at(&self, (i, j): (i64, i64), (w, h): (i64, i64)) -> Option<(bool, u64)> {
         let side = |e: Option<&TileEdges>, v: fn(&TileEdges) -> &Vec<(bool, u64)>, k: i64| {
@@ -89,7 +89,7 @@ pub(super) enum Cell {
 /// A cell's test outcome and the rejected prefix its children inherit.
 pub(super) struct Decision {
     pub(super) cell: Cell,
-    pub(super) floor: Floor,
+    pub(super) floor: EmptyPrefix,
     /// The beam was included: only the colour interval was too wide.
     pub(super) by_shading: bool,
     /// Every ray of the beam is proven to hit one object inside a thin
@@ -202,12 +202,12 @@ pub(crate) fn classify_tile(
         w,
         sampling: vec![Sampling::Base; n],
         traced: vec![true; n],
-        floors: vec![Floor::NONE; n],
+        floors: vec![EmptyPrefix::NONE; n],
         edge: vec![false; n],
         brackets: vec![None; n],
         by_shading: vec![false; n],
     };
-    let ctx = Ctx {
+    let ctx = PixelAreas {
         tr,
         all: (0..tr.ctx.evals.len() as u32).collect(),
         threshold,
@@ -219,7 +219,7 @@ pub(crate) fn classify_tile(
         x1: w,
         y1: h,
     };
-    ctx.block(&mut c, whole, (Floor::NONE, None), st);
+    ctx.block(&mut c, whole, (EmptyPrefix::NONE, None), st);
     c
 }
 
@@ -231,7 +231,7 @@ pub(crate) fn shadow_edges(
     (w, h): (u32, u32),
     depth: &[f64],
     shadowed: &[u64],
-    beside: Beside<'_>,
+    beside: NeighbourTiles<'_>,
 ) -> Vec<bool> {
     let (w, h) = (i64::from(w), i64::from(h));
     let base = |i: i64, j: i64| -> Option<(bool, u64)> {
@@ -265,7 +265,7 @@ pub(crate) struct Classified {
     pub traced: Vec<bool>,
     /// What a pixel's area tests proved along its rays: empty up to
     /// `at`, the first candidate piece ending at `near`.
-    pub floors: Vec<Floor>,
+    pub floors: Vec<EmptyPrefix>,
     /// Which pixels sit on a shadow edge (after
     /// [`Classified::mark_shadow_edges`]).
     pub edge: Vec<bool>,

@@ -23,7 +23,7 @@ use crate::render::enclose::colour::colour_interval;
 use crate::render::enclose::proof;
 use crate::render::prune::scope::Scope;
 use crate::render::prune::scope::TileState;
-use crate::render::trace::probe::{self, Floor, Form, Rect, Sweep};
+use crate::render::trace::probe::{self, EmptyPrefix, Rect, SignForm, SweepOutcome};
 use crate::render::trace::refine::RootBracket;
 use crate::render::view::camera::{CornerRays, RayGrid, bounds_box};
 

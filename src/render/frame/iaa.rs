@@ -17,11 +17,11 @@ pub(super) fn edges_of(t: &TileOut) -> TileEdges {
 // each level's split pixels, then the merge), over one tile's buffers.
 pub(super) fn anti_alias(
     tr: &Scope<'_>,
-    fine: Option<&Fine<'_>>,
+    fine: Option<&FinerScopes<'_>>,
     opts: &RenderOptions,
     aa: Aa,
     t: &mut TileOut,
-    beside: Beside<'_>,
+    beside: NeighbourTiles<'_>,
     bg: [f64; 3],
 ) {
     let (Aa::Iaa { depth, .. }, Some(fine)) = (aa, fine) else {

@@ -14,7 +14,7 @@ use rayon::prelude::*;
 
 use crate::eval::{Evaluator, Single};
 use crate::render::aa::SplitSamples;
-use crate::render::aa::{self, Aa, AaError, Beside, Sampling, TileEdges};
+use crate::render::aa::{self, Aa, AaError, NeighbourTiles, Sampling, TileEdges};
 use crate::render::context::stats::RenderStats;
 use crate::render::frame::assemble::assemble;
 use crate::render::frame::band::{Band, FloatLayers, band};
@@ -54,14 +54,14 @@ pub fn render_aa(
 }
 
 /// IAA's tracers of finer images.
-struct Fine<'a> {
+struct FinerScopes<'a> {
     /// Entry `l` traces at 2^l× the resolution, for the split pixels
     /// sampled `l` levels below the pixel (`aa::Sampling::level`): the
     /// depth, one below it (covered pixels) and 1 (shading alone).
     levels: Vec<Option<Scope<'a>>>,
 }
 
-impl<'a> Fine<'a> {
+impl<'a> FinerScopes<'a> {
     // The tracer of level `l` (one exists for every level a pixel can get).
     fn at(&self, l: u32) -> Option<&Scope<'a>> {
         self.levels.get(l as usize).and_then(Option::as_ref)
@@ -76,7 +76,7 @@ pub struct Frame<'a> {
     opts: RenderOptions,
     aa: Aa,
     tr: Scope<'a>,
-    fine: Option<Fine<'a>>,
+    fine: Option<FinerScopes<'a>>,
     pool: rayon::ThreadPool,
     bg: [f64; 3],
     depth_range: (f64, f64),
@@ -130,7 +130,7 @@ impl<'a> Frame<'a> {
                             .transpose()
                     })
                     .collect::<Result<_, _>>()?;
-                Some(Fine { levels })
+                Some(FinerScopes { levels })
             }
             _ => None,
         };
@@ -196,7 +196,7 @@ impl<'a> Frame<'a> {
             _ => Vec::new(),
         };
         let cols = self.opts.width.div_ceil(TILE) as usize;
-        let beside = |i: usize| Beside {
+        let beside = |i: usize| NeighbourTiles {
             above: i.checked_sub(cols).and_then(|k| edges.get(k)),
             below: edges.get(i + cols),
             left: (!i.is_multiple_of(cols))
@@ -279,7 +279,7 @@ impl<'a> Frame<'a> {
                         };
                         let edges = sides(&outs);
                         let below = next.as_deref().map(sides).unwrap_or_default();
-                        let beside = |i: usize| Beside {
+                        let beside = |i: usize| NeighbourTiles {
                             above: above.get(i),
                             below: below.get(i),
                             left: i.checked_sub(1).and_then(|k| edges.get(k)),
@@ -406,7 +406,7 @@ impl<'a> Frame<'a> {
     fn anti_alias_tiles<'e>(
         &self,
         outs: &mut [TileOut],
-        beside: impl Fn(usize) -> Beside<'e> + Sync,
+        beside: impl Fn(usize) -> NeighbourTiles<'e> + Sync,
         done: &AtomicUsize,
         total: usize,
     ) {

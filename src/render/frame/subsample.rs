@@ -9,7 +9,7 @@ use crate::render::aa::SplitSamples;
 use crate::render::context::stats::RenderStats;
 use crate::render::prune::scope::Scope;
 use crate::render::tile::{ShadowHint, TileOut, TileSpec, render_tile, squares};
-use crate::render::trace::probe::{Floor, Rect};
+use crate::render::trace::probe::{EmptyPrefix, Rect};
 use crate::render::trace::refine::RootBracket;
 
 // Averages each s×s block of a tile traced at s× resolution, in linear
@@ -69,7 +69,7 @@ pub(super) fn downsample(t: TileOut, s: u32) -> TileOut {
 #[derive(Copy, Clone)]
 pub(super) struct PixelFacts<'a> {
     /// Where each pixel's rays may start (its area proven empty before).
-    pub floors: &'a [Floor],
+    pub floors: &'a [EmptyPrefix],
     /// The shadow state each pixel's sub-samples may reuse.
     pub hints: &'a [ShadowHint],
     /// The bracket of each pixel's first roots, where its area's beam was
@@ -165,7 +165,7 @@ pub(super) fn trace_split(
             let mask: Vec<bool> = (0..nf).map(|k| split[pixel(k)]).collect();
             // Each sub-sample starts where its pixel's area was proven
             // empty up to: the fine render need not sweep that prefix again.
-            let starts: Vec<Floor> = (0..nf).map(|k| floors[pixel(k)]).collect();
+            let starts: Vec<EmptyPrefix> = (0..nf).map(|k| floors[pixel(k)]).collect();
             let fine_hints: Vec<ShadowHint> = (0..nf).map(|k| hints[pixel(k)]).collect();
             let fine_brackets: Vec<Option<RootBracket>> =
                 (0..nf).map(|k| brackets[pixel(k)]).collect();

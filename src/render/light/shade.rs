@@ -19,7 +19,7 @@ pub use crate::render::enclose::colour::{AMBIENT, SHININESS, SPECULAR};
 
 /// The geometry of one hit pixel, ready for shading.
 #[derive(Copy, Clone, Debug)]
-pub(crate) struct Surf {
+pub(crate) struct HitSurface {
     /// Hit point.
     pub p: DVec3,
     /// Unit normal facing the viewer.
@@ -43,7 +43,7 @@ pub(crate) struct Surf {
 pub(crate) struct TileSurfs {
     // Per pixel: the index of its surface in `list` (`NONE`: no hit).
     at: Vec<u32>,
-    list: Vec<Surf>,
+    list: Vec<HitSurface>,
     // Per surface in `list`: its pixel.
     pixel: Vec<u32>,
 }
@@ -62,7 +62,7 @@ impl TileSurfs {
     }
 
     /// Each surface with its pixel, in the order they were set.
-    pub(crate) fn iter(&self) -> impl Iterator<Item = (usize, &Surf)> {
+    pub(crate) fn iter(&self) -> impl Iterator<Item = (usize, &HitSurface)> {
         self.pixel.iter().map(|&k| k as usize).zip(&self.list)
     }
 
@@ -72,7 +72,7 @@ impl TileSurfs {
     }
 
     /// Sets pixel `k`'s surface (each pixel at most once).
-    pub(crate) fn set(&mut self, k: usize, s: Surf) {
+    pub(crate) fn set(&mut self, k: usize, s: HitSurface) {
         debug_assert_eq!(self.at[k], Self::NONE);
         self.at[k] = self.list.len() as u32;
         self.list.push(s);
@@ -80,12 +80,12 @@ impl TileSurfs {
     }
 
     /// Pixel `k`'s surface, if it hit.
-    pub(crate) fn get(&self, k: usize) -> Option<&Surf> {
+    pub(crate) fn get(&self, k: usize) -> Option<&HitSurface> {
         self.list.get(self.at[k] as usize)
     }
 
     /// Pixel `k`'s surface, if it hit.
-    pub(crate) fn get_mut(&mut self, k: usize) -> Option<&mut Surf> {
+    pub(crate) fn get_mut(&mut self, k: usize) -> Option<&mut HitSurface> {
         self.list.get_mut(self.at[k] as usize)
     }
 }
@@ -96,7 +96,7 @@ pub(crate) fn surface(
     ray: &crate::render::view::camera::PixelRay,
     hit: &crate::render::Hit,
     st: &mut RenderStats,
-) -> Surf {
+) -> HitSurface {
     let p = DVec3::from_array(ray.at(hit.t));
     let (dm, dm_len) = normalize_with_length(DVec3::from_array(ray.dm));
     let v = -dm.unwrap_or(DVec3::Z);
@@ -106,7 +106,7 @@ pub(crate) fn surface(
         // A cut face at the bounds: face the viewer; its shadow segments
         // start on the face itself (inside the solid, which shadows it
         // wherever the light shines into the bounds).
-        return Surf {
+        return HitSurface {
             p,
             n: v,
             q: p,
@@ -130,7 +130,7 @@ pub(crate) fn surface(
         Some(t) => DVec3::from_array(ray.at(segment_start(tr, ray, hit.obj, t, st))),
         None => p + nout * eps,
     };
-    Surf {
+    HitSurface {
         p,
         n,
         q,
@@ -296,7 +296,7 @@ struct Memo {
 /// leaves for the next.
 pub(crate) fn shade(
     tr: &Scope<'_>,
-    s: &Surf,
+    s: &HitSurface,
     known: KnownShadows<'_>,
     memo: &mut LightMemo,
     st: &mut TileState,
@@ -420,7 +420,7 @@ mod tests {
                 })))
                 .unwrap();
                 let p = DVec3::new(0.1 + 0.1 * rnd(), 0.1 + 0.1 * rnd(), 0.1 + 0.1 * rnd());
-                let surf = Surf {
+                let surf = HitSurface {
                     p,
                     n,
                     q: p,

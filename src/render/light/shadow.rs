@@ -43,7 +43,7 @@
 
 use glam::DVec3;
 
-use super::shade::Surf;
+use super::shade::HitSurface;
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_hull, box_meet, point_box};
 use crate::render::context::stats::RenderStats;
@@ -119,7 +119,7 @@ const SEGMENT_CELL_RATIO: f64 = 2.0;
 /// Tests one shadow beam for a set of surface points and one light.
 pub(crate) fn shadow_beam(
     tr: &Scope<'_>,
-    surfs: &[Surf],
+    surfs: &[HitSurface],
     kind: LightKind,
     st: &mut TileState,
 ) -> bool {

@@ -203,7 +203,7 @@ impl<'a> Scope<'a> {
     }
 
     /// [`Scope::first_pieces`], with `[t0, near]` a piece of its own,
-    /// taken first, when `t0 < near < t1` (see `probe::Floor`).
+    /// taken first, when `t0 < near < t1` (see `probe::EmptyPrefix`).
     pub(crate) fn first_pieces_near(&self, t0: f64, near: f64, t1: f64) -> Vec<(f64, f64)> {
         if !(t0 < near && near < t1) {
             return self.first_pieces(t0, t1);

@@ -14,7 +14,7 @@ use crate::render::light::shadow;
 use crate::render::prune::scope::Scope;
 use crate::render::prune::scope::TileState;
 use crate::render::trace::beam::{self, TileRays};
-use crate::render::trace::probe::{Floor, Rect};
+use crate::render::trace::probe::{EmptyPrefix, Rect};
 use crate::render::trace::refine::{RefineScratch, RootBracket};
 use crate::render::trace::{plane, ray};
 use crate::render::view::camera::RayGrid;
@@ -42,7 +42,7 @@ pub(crate) struct TileSpec<'m> {
     /// Row-major: a ray parameter before which each pixel's ray is known
     /// to meet no surface, and where its first surface most likely lies
     /// (None: its clip start).
-    pub floors: Option<&'m [Floor]>,
+    pub floors: Option<&'m [EmptyPrefix]>,
     /// Row-major: shadow states a sample may take instead of tracing
     /// its shadow segments (None: every sample traces its own).
     pub shadow_hints: Option<&'m [ShadowHint]>,
@@ -246,7 +246,7 @@ fn traced_out(
     spec: &TileSpec<'_>,
     opts: &RenderOptions,
     tile: &TileRays,
-    lit: shading::Lit,
+    lit: shading::LitPixels,
     st: TileState,
 ) -> TileOut {
     let n = tile.hits.len();
@@ -421,7 +421,7 @@ fn tile_rays(tr: &Scope<'_>, opts: &RenderOptions, spec: &TileSpec<'_>) -> TileR
         .collect();
     // The tile's beam starts where the nearest floor is, and looks first
     // as deep as the deepest candidate.
-    let top = spec.floors.map_or(Floor::NONE, |f| {
+    let top = spec.floors.map_or(EmptyPrefix::NONE, |f| {
         let on = |k: &usize| spec.mask.is_none_or(|m| m[*k]);
         let at = (0..n)
             .filter(on)
@@ -429,9 +429,9 @@ fn tile_rays(tr: &Scope<'_>, opts: &RenderOptions, spec: &TileSpec<'_>) -> TileR
             .fold(f64::INFINITY, f64::min);
         let near = (0..n).filter(on).map(|k| f[k].near).fold(at, f64::max);
         if at.is_finite() {
-            Floor { at, near }
+            EmptyPrefix { at, near }
         } else {
-            Floor::NONE
+            EmptyPrefix::NONE
         }
     });
     TileRays {
@@ -492,7 +492,7 @@ pub(crate) fn squares(w: u32, h: u32, side: u32) -> impl Iterator<Item = Rect> {
 fn rays_from_floors(
     tr: &Scope<'_>,
     tile: &mut TileRays,
-    floors: Option<&[Floor]>,
+    floors: Option<&[EmptyPrefix]>,
     st: &mut TileState,
 ) {
     let all: Vec<u32> = (0..tr.ctx.evals.len() as u32).collect();
@@ -501,7 +501,7 @@ fn rays_from_floors(
             tile.class[k] = Class::Outside;
             continue;
         };
-        let floor = floors.map_or(Floor::NONE, |f| f[k]);
+        let floor = floors.map_or(EmptyPrefix::NONE, |f| f[k]);
         beam::single_ray(tr, tile, k, (floor, true), range, &all, st);
     }
 }

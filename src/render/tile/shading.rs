@@ -56,7 +56,7 @@ pub(super) fn shadow_beams(
 }
 
 // The shaded pixels of a tile.
-pub(super) struct Lit {
+pub(super) struct LitPixels {
     pub(super) linear: Vec<[f64; 3]>,
     pub(super) shadowed: Vec<u64>,
     pub(super) normals: Option<Vec<[f64; 3]>>,
@@ -94,7 +94,7 @@ impl CutFaces {
         mut self,
         tr: &Scope<'_>,
         tile: &TileRays,
-        lit: &mut Lit,
+        lit: &mut LitPixels,
         st: &mut TileState,
     ) {
         for (k, h) in tile.hits.iter().enumerate() {
@@ -135,7 +135,7 @@ pub(super) fn shade_pixels(
     background: [f64; 3],
     opts: &RenderOptions,
     ts: &mut TileState,
-) -> Lit {
+) -> LitPixels {
     let PixelShadows { lit_by_beam, known } = known;
     let t_shade = Instant::now();
     let (n, nl) = (surfs.len(), tr.ctx.lights.len());
@@ -171,7 +171,7 @@ pub(super) fn shade_pixels(
     // Per-pixel lighting time is dominated by shadow segments.
     ts.stats.shadow_cpu_ms += shadow_ms;
     ts.stats.shade_cpu_ms += (ms_since(t_shade) - shadow_ms).max(0.0);
-    Lit {
+    LitPixels {
         linear,
         shadowed,
         normals,

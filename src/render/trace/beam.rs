@@ -26,7 +26,7 @@
 //! (`Scope::interval_tight`), which pays off on the small hulls near a
 //! surface, where the natural extension overestimates most.
 
-use super::probe::{self, Floor, Form, Rect, Sweep, SweepRange};
+use super::probe::{self, EmptyPrefix, Rect, SignForm, SweepOutcome, SweepRange};
 use super::ray::{scene_point, trace_ray, trace_ray_near_first};
 use super::refine::{Bracket, refine_batch, scene_points};
 use super::sweep::{self, Search, SweepState, Visit};
@@ -60,7 +60,7 @@ fn block(
     tr: &Scope<'_>,
     tile: &mut TileRays,
     b: Rect,
-    floor: Floor,
+    floor: EmptyPrefix,
     live: &[u32],
     st: &mut TileState,
 ) {
@@ -107,7 +107,7 @@ pub(crate) fn single_ray(
     tr: &Scope<'_>,
     tile: &mut TileRays,
     k: usize,
-    (floor, from_floor): (Floor, bool),
+    (floor, from_floor): (EmptyPrefix, bool),
     (t0, t1): (f64, f64),
     live: &[u32],
     st: &mut TileState,
@@ -132,7 +132,7 @@ pub(crate) fn single_ray(
     // exact mask.
     // IAA's base samples and sub-samples start at the floor too (their
     // masks are compared with no other method's). Both sweep the block's
-    // first candidate piece first (see `probe::Floor` and
+    // first candidate piece first (see `probe::EmptyPrefix` and
     // `Scope::ray_pieces`).
     let start = if from_floor
         && t_floor > pt0
@@ -166,26 +166,26 @@ fn beam_tests(
 ) {
     let side_px = (b.x1 - b.x0).max(b.y1 - b.y0);
     let side = f64::from(side_px);
-    let form = Form::Tight(side_px.ilog2() as usize);
+    let form = SignForm::Tight(side_px.ilog2() as usize);
     let min_w = |t: f64| probe::min_width(tr, side, t);
     let eval_min =
         |t: Interval, st: &mut TileState| probe::scene_signs(tr, live, corners.hull(t), form, st);
     let (ta, tb) = match probe::sweep(tr, SweepRange { t0, near, t1 }, min_w, |t| {
         eval_min(t, st).positive()
     }) {
-        Sweep::Empty => {
+        SweepOutcome::Empty => {
             st.stats.blocks_rejected += 1;
             set_block(tile, b, Class::Background);
             return;
         }
         // Flat scenes are traced by `super::plane`; a flat sweep here
         // would only be split down to single rays.
-        Sweep::Flat => {
+        SweepOutcome::Flat => {
             st.stats.blocks_undecided += 1;
-            split(tr, tile, b, Floor::at(t0), live, st);
+            split(tr, tile, b, EmptyPrefix::at(t0), live, st);
             return;
         }
-        Sweep::Candidate(ta, tb) => (ta, tb),
+        SweepOutcome::Candidate(ta, tb) => (ta, tb),
     };
     // Inclusion test: positive at ta, negative at some tb' ahead.
     let reach = (&probe::INCLUSION_REACH[..], &probe::DEEP_REACH[..]);
@@ -243,7 +243,7 @@ fn beam_tests(
     let reach = ta + PRUNE_WINDOW * (tb - ta).max(min_w(ta));
     let end = tr.slice_end_after(ta).map_or(t1, |e| e.min(t1));
     let window = Interval::new(ta, end.min(reach));
-    let floor = Floor { at: ta, near: tb };
+    let floor = EmptyPrefix { at: ta, near: tb };
     split_pruned(tr, tile, b, (corners, window), floor, &sub_live, st);
 }
 
@@ -281,7 +281,7 @@ fn split_pruned(
     tile: &mut TileRays,
     b: Rect,
     (corners, window): (&CornerRays, Interval),
-    floor: Floor,
+    floor: EmptyPrefix,
     live: &[u32],
     st: &mut TileState,
 ) {
@@ -303,7 +303,7 @@ fn split(
     tr: &Scope<'_>,
     tile: &mut TileRays,
     b: Rect,
-    floor: Floor,
+    floor: EmptyPrefix,
     live: &[u32],
     st: &mut TileState,
 ) {

@@ -11,7 +11,7 @@ use crate::render::prune::scope::Scope;
 use crate::render::prune::scope::TileState;
 use crate::render::trace::sweep::{self, Search, SweepState, Visit};
 
-/// Floor of the pixel spacing a sweep's smallest piece is sized from, so
+/// EmptyPrefix of the pixel spacing a sweep's smallest piece is sized from, so
 /// that the sweep ends where the spacing vanishes (at the eye of a
 /// perspective camera).
 pub(crate) const MIN_SPACING: f64 = 1e-9;
@@ -92,7 +92,7 @@ pub(crate) fn min_width(tr: &Scope<'_>, side: f64, t: f64) -> f64 {
 
 /// How each object's interval over a beam piece is taken.
 #[derive(Copy, Clone, Debug)]
-pub(crate) enum Form {
+pub(crate) enum SignForm {
     /// The natural interval extension.
     Natural,
     /// Tightened by the mean-value form, for blocks of this size class
@@ -107,20 +107,20 @@ pub(crate) fn scene_signs(
     tr: &Scope<'_>,
     live: &[u32],
     hb: IBox,
-    form: Form,
+    form: SignForm,
     st: &mut TileState,
 ) -> SignBound {
     let mut f = SignBound::NONE;
     for &k in live {
         let v = match form {
-            Form::Natural => {
+            SignForm::Natural => {
                 let v = tr.ctx.interval(k as usize, hb, &mut st.stats);
                 if v.is_empty() {
                     continue;
                 }
                 SignBound::of(v)
             }
-            Form::Tight(level) => match tr.interval_tight(k as usize, hb, level, st) {
+            SignForm::Tight(level) => match tr.interval_tight(k as usize, hb, level, st) {
                 Some(v) => v,
                 None => continue,
             },
@@ -133,7 +133,7 @@ pub(crate) fn scene_signs(
 /// What the sweep of a beam leaves the beams inside it: where along their
 /// rays they may start, and where to look first.
 #[derive(Copy, Clone, Debug, PartialEq)]
-pub(crate) struct Floor {
+pub(crate) struct EmptyPrefix {
     /// The beam was proven empty before this ray parameter.
     pub at: f64,
     /// The end of the beam's first candidate piece (`at` when there is
@@ -144,13 +144,13 @@ pub(crate) struct Floor {
     pub near: f64,
 }
 
-impl Floor {
+impl EmptyPrefix {
     /// Nothing proven: start at 0.
-    pub(crate) const NONE: Floor = Floor { at: 0.0, near: 0.0 };
+    pub(crate) const NONE: EmptyPrefix = EmptyPrefix { at: 0.0, near: 0.0 };
 
     /// Proven empty before `at`, with no candidate to look at first.
-    pub(crate) fn at(at: f64) -> Floor {
-        Floor { at, near: at }
+    pub(crate) fn at(at: f64) -> EmptyPrefix {
+        EmptyPrefix { at, near: at }
     }
 
     /// Where a sweep of an inner beam starting at `t0` ends its first
@@ -164,7 +164,7 @@ impl Floor {
 
 /// What the rejection sweep of a beam over its T range found.
 #[derive(Copy, Clone, Debug, PartialEq)]
-pub(crate) enum Sweep {
+pub(crate) enum SweepOutcome {
     /// Every piece was proven free of surface: no ray of the beam hits.
     Empty,
     /// The scene is flat (constant along the rays, so bisecting T cannot
@@ -176,7 +176,7 @@ pub(crate) enum Sweep {
 
 /// The part of a beam's T range a rejection sweep covers: `[t0, t1]`,
 /// with `[t0, near]` a piece of its own, taken first, when
-/// `t0 < near < t1` (see [`Floor`]).
+/// `t0 < near < t1` (see [`EmptyPrefix`]).
 #[derive(Copy, Clone, Debug)]
 pub(crate) struct SweepRange {
     /// Start of the range.
@@ -199,20 +199,20 @@ pub(crate) fn sweep(
     range: SweepRange,
     min_w: impl Fn(f64) -> f64,
     mut excluded: impl FnMut(Interval) -> bool,
-) -> Sweep {
+) -> SweepOutcome {
     let SweepRange { t0, near, t1 } = range;
     if tr.ctx.flat {
         return if excluded(Interval::new(t0, t1)) {
-            Sweep::Empty
+            SweepOutcome::Empty
         } else {
-            Sweep::Flat
+            SweepOutcome::Flat
         };
     }
     let pieces = tr.first_pieces_near(t0, near, t1);
     let mut search = FirstCandidate { min_w, excluded };
     match sweep::sweep(tr, pieces, &mut search, &mut SweepState::new()) {
-        Some((ta, tb)) => Sweep::Candidate(ta, tb),
-        None => Sweep::Empty,
+        Some((ta, tb)) => SweepOutcome::Candidate(ta, tb),
+        None => SweepOutcome::Empty,
     }
 }
 
@@ -342,15 +342,15 @@ mod tests {
             let mut tr = Scope::for_tests(&crate::scene::Camera::default(), 8);
             tr.pruner.slice_ends = ends.into();
             let s = sweep(&tr, range, |_| 0.5, |t| t.hi < 3.0 || t.lo > 3.5);
-            let Sweep::Candidate(a, b) = s else {
+            let SweepOutcome::Candidate(a, b) = s else {
                 panic!("{s:?}")
             };
             assert!(a <= 3.0 && b >= 3.0 && b - a <= 0.5, "{a} {b}");
-            assert_eq!(sweep(&tr, range, |_| 0.5, |_| true), Sweep::Empty);
+            assert_eq!(sweep(&tr, range, |_| 0.5, |_| true), SweepOutcome::Empty);
         }
         let mut tr = Scope::for_tests(&crate::scene::Camera::default(), 8);
         tr.ctx.flat = true;
-        assert_eq!(sweep(&tr, range, |_| 0.5, |_| false), Sweep::Flat);
+        assert_eq!(sweep(&tr, range, |_| 0.5, |_| false), SweepOutcome::Flat);
         let p = equal_pieces(1.0, 2.0, 4);
         assert_eq!(p.last(), Some(&(1.0, 1.25)));
         assert_eq!(p[0], (1.75, 2.0));

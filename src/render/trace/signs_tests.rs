@@ -8,7 +8,7 @@
 
 use std::sync::Arc;
 
-use super::probe::{Form, scene_signs};
+use super::probe::{SignForm, scene_signs};
 use super::refine::{Bracket, RefineScratch, refine, refine_batch};
 use crate::eval::Evaluator;
 use crate::eval::interp::Interpreter;
@@ -157,7 +157,7 @@ fn sign_bounds_across_tapes_never_contradict_the_whole_function() {
             continue;
         }
         boxes += 1;
-        for form in [Form::Natural, Form::Tight(0)] {
+        for form in [SignForm::Natural, SignForm::Tight(0)] {
             let s = scene_signs(&tr, &[0], b, form, &mut st);
             if !(s.positive() || s.negative()) {
                 continue;

@@ -4,7 +4,7 @@
 use crate::interval::Interval;
 use crate::interval::boxes::IBox;
 use crate::render::prune::scope::Scope;
-use crate::render::trace::probe::{Floor, Rect};
+use crate::render::trace::probe::{EmptyPrefix, Rect};
 use crate::render::trace::refine::RefineScratch;
 use crate::render::view::camera::{PixelRay, RayGrid};
 use crate::render::{Class, Hit};
@@ -38,7 +38,7 @@ pub(crate) struct TileRays {
     /// Included blocks, for shadow beams.
     pub included: Vec<Rect>,
     /// What is known along the whole tile's beam before tracing it.
-    pub top: Floor,
+    pub top: EmptyPrefix,
     /// Buffers of batched root refinement, reused by the tile's blocks.
     pub refine: RefineScratch,
 }
