@@ -17,18 +17,27 @@ pub(super) struct PixelAreas<'t, 'a> {
     pub(super) corners: RayGrid,
 }
 
+/// What a block of pixels knows from the cell it was quartered from.
+#[derive(Copy, Clone)]
+pub(super) struct FromParent {
+    /// Where the parent's sweep proved its beam empty up to.
+    pub floor: EmptyPrefix,
+    /// The parent's included bracket, which every ray of the block shares.
+    pub inherited: Option<RootBracket>,
+}
+
 impl PixelAreas<'_, '_> {
     // A block of whole pixels (tile coordinates, half-open).
     pub(super) fn block(
         &self,
         c: &mut Classified,
         b: Rect,
-        (floor, inherited): (EmptyPrefix, Option<RootBracket>),
+        parent: FromParent,
         st: &mut TileState,
     ) {
         // Only a pixel is sampled by what the covered test finds: larger
         // cells skip it.
-        let d = self.decide(b, (floor, inherited), b.is_pixel(), st);
+        let d = self.decide(b, parent, b.is_pixel(), st);
         match d.cell {
             Cell::Background => {
                 for p in b.pixels() {
@@ -63,7 +72,15 @@ impl PixelAreas<'_, '_> {
         // Only an included cell's bracket holds for its quarters' tests.
         let inherited = d.bracket.filter(|br| br.unique);
         for q in b.quarters_by_row() {
-            self.block(c, q, (d.floor, inherited), st);
+            self.block(
+                c,
+                q,
+                FromParent {
+                    floor: d.floor,
+                    inherited,
+                },
+                st,
+            );
         }
     }
 
@@ -75,10 +92,11 @@ impl PixelAreas<'_, '_> {
     pub(super) fn decide(
         &self,
         b: Rect,
-        (floor, inherited): (EmptyPrefix, Option<RootBracket>),
+        parent: FromParent,
         cover: bool,
         st: &mut TileState,
     ) -> Decision {
+        let FromParent { floor, inherited } = parent;
         let tr = self.tr;
         let decide = |cell, floor| Decision {
             cell,
@@ -131,13 +149,22 @@ impl PixelAreas<'_, '_> {
             (ta, tb),
             t1,
             min_w,
-            (&probe::INCLUSION_REACH, &[]),
+            probe::Reach {
+                usual: &probe::INCLUSION_REACH,
+                deeper: &[],
+            },
             &mut whole,
         ) else {
             // No inclusion bracket; the pixel may still be covered, with
             // its negative cross-section deeper in.
             let cover_bracket = cover
-                .then(|| probe::bracket_end((ta, tb), t1, min_w, (&COVER_REACH, &[]), &mut whole))
+                .then(|| {
+                    let reach = probe::Reach {
+                        usual: &COVER_REACH,
+                        deeper: &[],
+                    };
+                    probe::bracket_end((ta, tb), t1, min_w, reach, &mut whole)
+                })
                 .flatten()
                 .and_then(|tc| self.cover_bracket(&corners, &bounds, (ta, tc), &mut st.stats));
             return Decision {

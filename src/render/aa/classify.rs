@@ -219,7 +219,11 @@ pub(crate) fn classify_tile(
         x1: w,
         y1: h,
     };
-    ctx.block(&mut c, whole, (EmptyPrefix::NONE, None), st);
+    let top = FromParent {
+        floor: EmptyPrefix::NONE,
+        inherited: None,
+    };
+    ctx.block(&mut c, whole, top, st);
     c
 }
 

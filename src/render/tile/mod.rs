@@ -502,7 +502,11 @@ fn rays_from_floors(
             continue;
         };
         let floor = floors.map_or(EmptyPrefix::NONE, |f| f[k]);
-        beam::single_ray(tr, tile, k, (floor, true), range, &all, st);
+        let start = beam::RayStart {
+            floor,
+            from_floor: true,
+        };
+        beam::single_ray(tr, tile, k, start, range, &all, st);
     }
 }
 

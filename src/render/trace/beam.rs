@@ -85,7 +85,8 @@ fn block(
     if single {
         let k = tile.idx(b.x0, b.y0);
         let from_floor = tr.ctx.large || tr.ctx.sub_samples;
-        single_ray(tr, tile, k, (floor, from_floor), (t0, t1), live, st);
+        let start = RayStart { floor, from_floor };
+        single_ray(tr, tile, k, start, (t0, t1), live, st);
         return;
     }
     // The beam's corner rays (the camera's, to the bit), which both tests
@@ -99,6 +100,16 @@ fn block(
     beam_tests(tr, tile, b, &corners, (t0, near, t1), live, st);
 }
 
+/// Where a single ray below a beam may start.
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct RayStart {
+    /// What the beams above proved empty along the ray.
+    pub floor: EmptyPrefix,
+    /// Whether the ray starts at the floor (where f is positive there)
+    /// rather than at its clip start.
+    pub from_floor: bool,
+}
+
 /// Traces pixel `k` of the tile as one guaranteed ray, below a beam that
 /// proved its rays empty up to `floor` (the block's T range `(t0, t1)`
 /// where its slab holds none); from the floor where `from_floor` says so
@@ -107,11 +118,12 @@ pub(crate) fn single_ray(
     tr: &Scope<'_>,
     tile: &mut TileRays,
     k: usize,
-    (floor, from_floor): (EmptyPrefix, bool),
+    start: RayStart,
     (t0, t1): (f64, f64),
     live: &[u32],
     st: &mut TileState,
 ) {
+    let RayStart { floor, from_floor } = start;
     let t_floor = floor.at;
     let (pt0, pt1) = tile.slabs[k].unwrap_or((t0, t1));
     let ray = tile.ray(k);
@@ -188,8 +200,7 @@ fn beam_tests(
         SweepOutcome::Candidate(ta, tb) => (ta, tb),
     };
     // Inclusion test: positive at ta, negative at some tb' ahead.
-    let reach = (&probe::INCLUSION_REACH[..], &probe::DEEP_REACH[..]);
-    let end = probe::bracket_end((ta, tb), t1, min_w, reach, |t| {
+    let end = probe::bracket_end((ta, tb), t1, min_w, probe::Reach::INCLUSION, |t| {
         eval_min(Interval::point(t), st)
     });
     // A bracket found past `INCLUSION_REACH` (a grazing beam) is long: its

@@ -268,16 +268,40 @@ fn leans_inside(c: SignBound) -> bool {
 /// ([`INCLUSION_REACH`] for the inclusion test); past those, the `deeper`
 /// multiples are tried while the last cross-section
 /// [leans inside](leans_inside). `None` when all fail.
+/// How far past a candidate piece [`bracket_end`] looks, in multiples of
+/// the piece's width: the `usual` multiples, then the `deeper` ones while
+/// the cross-sections lean inside.
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct Reach<'a> {
+    /// Always tried.
+    pub usual: &'a [f64],
+    /// Tried past the usual ones, while the last cross-section leans
+    /// inside.
+    pub deeper: &'a [f64],
+}
+
+impl Reach<'static> {
+    /// The inclusion test's reach, [`INCLUSION_REACH`] then [`DEEP_REACH`].
+    pub(crate) const INCLUSION: Reach<'static> = Reach {
+        usual: &INCLUSION_REACH,
+        deeper: &DEEP_REACH,
+    };
+}
+
 pub(crate) fn bracket_end(
     (ta, tb): (f64, f64),
     t1: f64,
     min_w: impl Fn(f64) -> f64,
-    (reach, deeper): (&[f64], &[f64]),
+    reach: Reach<'_>,
     mut cross: impl FnMut(f64) -> SignBound,
 ) -> Option<f64> {
     if !cross(ta).positive() {
         return None;
     }
+    let Reach {
+        usual: reach,
+        deeper,
+    } = reach;
     let w = (tb - ta).max(min_w(ta));
     // Each multiple, and whether it is one of the deeper ones.
     let steps = reach.iter().map(|&m| (m, false));
@@ -379,7 +403,7 @@ mod tests {
 
     #[test]
     fn the_bracket_reaches_deeper_only_while_the_cross_section_leans_inside() {
-        let reach = (&INCLUSION_REACH[..], &DEEP_REACH[..]);
+        let reach = Reach::INCLUSION;
         let w = |_| 0.0;
         // Inside within the usual reach: found there, whatever the lean.
         let mut n = 0;
@@ -413,7 +437,10 @@ mod tests {
         assert_eq!((end, n), (None, 1));
         // Without deeper multiples, the usual reach alone.
         let mut n = 0;
-        let usual = (&INCLUSION_REACH[..], &[][..]);
+        let usual = Reach {
+            usual: &INCLUSION_REACH,
+            deeper: &[],
+        };
         let end = bracket_end((1.0, 2.0), 100.0, w, usual, model(1.5, 10.0, 0.5, &mut n));
         assert_eq!((end, n), (None, 1 + 3));
     }
