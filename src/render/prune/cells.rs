@@ -64,9 +64,9 @@ impl CellTapes {
     /// holds it (it leaves the bounds) or nothing prunes there.
     pub(crate) fn holding(tr: &Scope<'_>, b: &IBox, st: &mut TileState) -> Option<EvalSet> {
         let key = smallest_cell(tr, b)?;
-        let mut cells = std::mem::take(&mut st.cells);
+        let mut cells = std::mem::take(&mut st.prune.cells);
         let evals = cells.evals(tr, key, st);
-        st.cells = cells;
+        st.prune.cells = cells;
         evals
     }
 

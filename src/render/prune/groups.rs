@@ -258,7 +258,7 @@ fn pruned_to_each(tapes: &[Option<&Tape>], regions: &[IBox], st: &mut TileState)
             Some(tape) if !regions.is_empty() => {
                 let from = std::ptr::from_ref(*tape) as usize;
                 (tape
-                    .prune_batch(regions, usize::MAX, &mut st.workspace)
+                    .prune_batch(regions, usize::MAX, &mut st.prune.workspace)
                     .into_iter())
                 .map(|p| Some((from, p.map(|p| p.tape))))
                 .collect()

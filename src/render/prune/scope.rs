@@ -94,16 +94,26 @@ pub(crate) struct Scope<'a> {
     pub pruner: Pruner,
 }
 
-/// What tracing one tile carries from one evaluation to the next.
+/// What tracing one tile carries from one evaluation to the next, by
+/// owner: the counters and the enclosure policy, and the pruner's scratch
+/// (the refinement's is the tile's rays', `trace::tile_rays`).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct TileState {
     /// The tile's counters, merged into the render's at the end.
     pub stats: RenderStats,
     /// The tile's record of the mean-value form (policy, not a counter).
     pub mean_value: MeanValuePolicy,
+    /// What the pruner keeps from one pruning to the next.
+    pub prune: PruneScratch,
+}
+
+/// The pruner's per-tile scratch.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct PruneScratch {
     /// Scratch space for pruning tapes.
     pub workspace: Workspace,
-    /// The tile's octree cells, for shadow segments (see `prune::cells`).
+    /// The tile's octree cells, for shadow segments (see `prune::cells`),
+    /// dropped with the tile.
     pub cells: CellTapes,
 }
 
@@ -377,7 +387,9 @@ impl<'a> Scope<'a> {
                         })
                         .collect();
                     let boxes: Vec<IBox> = same.iter().map(|&j| regions[j]).collect();
-                    let children = plan.tape.prune_batch(&boxes, plan.most, &mut st.workspace);
+                    let children =
+                        plan.tape
+                            .prune_batch(&boxes, plan.most, &mut st.prune.workspace);
                     for (&j, child) in same.iter().zip(children) {
                         done[j] = true;
                         let plan = plans[j].as_ref().expect("planned");
@@ -406,7 +418,7 @@ impl<'a> Scope<'a> {
         let plan = self.prune_plan(k, e, region, min_ops)?;
         let p = plan
             .tape
-            .prune_to_at_most(region, plan.most, &mut st.workspace)?;
+            .prune_to_at_most(region, plan.most, &mut st.prune.workspace)?;
         Some(self.prune_finish(&plan, region, p, st))
     }
 

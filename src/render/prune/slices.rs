@@ -260,7 +260,9 @@ impl<'e> Beam<'e> {
                     }
                     // Pruned from `tape` itself (nothing held it).
                     (_, Some(own)) if held.is_none() => own,
-                    _ => source.prune(region, &mut st.workspace).map(|p| p.tape),
+                    _ => source
+                        .prune(region, &mut st.prune.workspace)
+                        .map(|p| p.tape),
                 };
                 let own = own.unwrap_or_else(|| source.clone());
                 if own.len() * gain(above.0.as_ref()) <= above.1 {
@@ -339,7 +341,7 @@ impl<'e> Beam<'e> {
             && p1.held.is_none()
         {
             let mut pruned = tape
-                .prune_batch(&[p0.region, p1.region], usize::MAX, &mut st.workspace)
+                .prune_batch(&[p0.region, p1.region], usize::MAX, &mut st.prune.workspace)
                 .into_iter()
                 .map(|p| p.map(|p| p.tape));
             p0.pruned = pruned.next();

@@ -275,7 +275,7 @@ fn traced_out(
         // The tile's cells go with the tile: a finished tile waits for
         // its row, and the tapes of its cells are most of its memory.
         state: TileState {
-            cells: Default::default(),
+            prune: Default::default(),
             ..st
         },
         classified: None,
