@@ -49,6 +49,16 @@ pub struct Regional {
     children: Vec<Regional>,
 }
 
+/// What evaluates a region that lets another evaluator answer for it (one
+/// exact on the region, usually its parent's), and that function's ops.
+#[derive(Clone)]
+pub struct Answer {
+    /// The evaluator that answers.
+    pub evaluator: Arc<dyn Evaluator>,
+    /// Ops of the function it evaluates.
+    pub ops: usize,
+}
+
 /// What a region's evaluator falls back on outside its region.
 #[derive(Clone)]
 pub enum Parent {
@@ -88,13 +98,12 @@ impl Regional {
     /// A region that keeps `tape` only to prune from and lets `answer`
     /// (an evaluator exact on the region, usually the parent's, of a
     /// function of `answer_len` ops) evaluate.
-    pub fn delegating(
-        region: IBox,
-        tape: Tape,
-        (answer, answer_len): (Arc<dyn Evaluator>, usize),
-        parent: Parent,
-    ) -> Regional {
+    pub fn delegating(region: IBox, tape: Tape, answer: Answer, parent: Parent) -> Regional {
         let (parent, parent_region) = parent.split();
+        let Answer {
+            evaluator: answer,
+            ops: answer_len,
+        } = answer;
         Regional {
             region,
             tape: Arc::new(TapeEvaluator::new(tape)),
@@ -113,10 +122,14 @@ impl Regional {
     pub fn sharing(
         region: IBox,
         tape: Arc<TapeEvaluator>,
-        (answer, answer_len): (Arc<dyn Evaluator>, usize),
+        answer: Answer,
         parent: Parent,
     ) -> Regional {
         let (parent, parent_region) = parent.split();
+        let Answer {
+            evaluator: answer,
+            ops: answer_len,
+        } = answer;
         Regional {
             region,
             tape,

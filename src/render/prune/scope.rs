@@ -6,7 +6,7 @@
 use std::sync::Arc;
 
 use crate::eval::Evaluator;
-use crate::eval::regional::{Parent, Regional};
+use crate::eval::regional::{Answer, Parent, Regional};
 use crate::eval::tape::{Tape, Workspace};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_within};
@@ -494,7 +494,10 @@ impl<'a> Scope<'a> {
             st.stats.pruned_ops_after += after as u64;
             Regional::new(region, p.tape, plan.source.clone())
         } else {
-            let answer = (Arc::clone(plan.answer), plan.before);
+            let answer = Answer {
+                evaluator: Arc::clone(plan.answer),
+                ops: plan.before,
+            };
             Regional::delegating(region, p.tape, answer, plan.source.clone())
         };
         (Arc::new(pruned), after)

@@ -7,8 +7,7 @@
 use std::sync::Arc;
 
 use super::groups::TileTapes;
-use crate::eval::Evaluator;
-use crate::eval::regional::{Parent, Regional};
+use crate::eval::regional::{Answer, Parent, Regional};
 use crate::eval::tape::Tape;
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_within};
@@ -100,7 +99,12 @@ impl Scope<'_> {
             });
         let tiles = group.as_ref().and_then(|(_, _, tiles)| tiles.as_deref());
         let group = group.as_ref().map(|(evals, _, _)| evals);
-        self.beam_trees(xs, ys, t, (group, tiles), false, st)
+        let from = TreeSource {
+            group,
+            tiles,
+            is_group: false,
+        };
+        self.beam_trees(xs, ys, t, from, st)
     }
 
     /// The trees of [`Scope::pruned_to_beam`] for a group of tiles, each
@@ -120,7 +124,12 @@ impl Scope<'_> {
         if !self.pruner.enabled {
             return None;
         }
-        self.beam_trees(xs, ys, t, (None, pre), true, st)
+        let from = TreeSource {
+            group: None,
+            tiles: pre,
+            is_group: true,
+        };
+        self.beam_trees(xs, ys, t, from, st)
     }
 
     // Each large function's tree of regions along the beam through `xs ×
@@ -131,10 +140,14 @@ impl Scope<'_> {
         xs: (f64, f64),
         ys: (f64, f64),
         t: Interval,
-        (group, tiles): (Option<&EvalSet>, Option<&TileTapes>),
-        group_beam: bool,
+        from: TreeSource<'_>,
         st: &mut TileState,
     ) -> Option<EvalSet> {
+        let TreeSource {
+            group,
+            tiles,
+            is_group: group_beam,
+        } = from;
         self.ctx.replace_evals(|k, e| match &self.pruner.tapes[k] {
             Some(tape)
                 if self.ctx.live_ops[k] >= PRUNE_MIN_OPS && self.ctx.region_of(k).is_none() =>
@@ -144,10 +157,19 @@ impl Scope<'_> {
                     Some(r) => (
                         Parent::Region(Arc::clone(r)),
                         r.pruned_tape(),
-                        (r.answer(), r.answer_len()),
+                        Answer {
+                            evaluator: Arc::clone(r.answer()),
+                            ops: r.answer_len(),
+                        },
                         Some(&**r),
                     ),
-                    None => (Parent::Whole(Arc::clone(e)), &**tape, (e, tape.len()), None),
+                    None => {
+                        let above = Answer {
+                            evaluator: Arc::clone(e),
+                            ops: tape.len(),
+                        };
+                        (Parent::Whole(Arc::clone(e)), &**tape, above, None)
+                    }
                 };
                 let beam = Beam {
                     xs,
@@ -162,7 +184,7 @@ impl Scope<'_> {
                     }),
                 };
                 let placed = beam.place(self, tape, t)?;
-                let tree = beam.node(self, tape, (t, placed), above, SLICE_DEPTH, st)?;
+                let tree = beam.node(self, tape, placed, above, SLICE_DEPTH, st)?;
                 let n = tree.pruned_tape().len();
                 Some((Arc::new(tree), n))
             }
@@ -171,11 +193,22 @@ impl Scope<'_> {
     }
 }
 
+// What a beam's trees start from: the trees of its group of tiles (for
+// a tile's beam), the tapes pruned for it ahead of time, and whether the
+// beam is a group's.
+struct TreeSource<'a> {
+    group: Option<&'a EvalSet>,
+    tiles: Option<&'a TileTapes>,
+    is_group: bool,
+}
+
 // A region of a beam's tree, placed before its node is built: its box,
 // the smallest region of the group's tree holding it (when that tape is
 // no longer than the one it would prune from), and its pruning from that
 // tape, where it was made with its sibling's (`None`: not made yet).
 struct Placed<'g> {
+    // The stretch of the rays the region covers.
+    range: Interval,
     region: IBox,
     held: Option<&'g Regional>,
     pruned: Option<Option<Tape>>,
@@ -222,28 +255,29 @@ impl<'e> Beam<'e> {
         &self,
         tr: &Scope<'_>,
         tape: &Tape,
-        (t, placed): (Interval, Placed<'_>),
-        above: (&Arc<dyn Evaluator>, usize),
+        placed: Placed<'_>,
+        above: Answer,
         depth: u32,
         st: &mut TileState,
     ) -> Option<Regional> {
         let Placed {
+            range: t,
             region,
             held,
             pruned,
         } = placed;
         let above = match held {
-            Some(h) if h.answer_len() < above.1 => (h.answer(), h.answer_len()),
+            Some(h) if h.answer_len() < above.ops => Answer {
+                evaluator: Arc::clone(h.answer()),
+                ops: h.answer_len(),
+            },
             _ => above,
         };
         let parent = self.parent.clone();
         let node = match held {
-            Some(h) if self.long(tr, t) => Regional::sharing(
-                region,
-                Arc::clone(h.shared_tape()),
-                (Arc::clone(above.0), above.1),
-                parent,
-            ),
+            Some(h) if self.long(tr, t) => {
+                Regional::sharing(region, Arc::clone(h.shared_tape()), above, parent)
+            }
             _ => {
                 let source = held.map_or(tape, Regional::pruned_tape);
                 // The pruning of this very region from this very tape,
@@ -265,12 +299,12 @@ impl<'e> Beam<'e> {
                         .map(|p| p.tape),
                 };
                 let own = own.unwrap_or_else(|| source.clone());
-                if own.len() * gain(above.0.as_ref()) <= above.1 {
-                    st.stats.pruned_ops_before += above.1 as u64;
+                if own.len() * gain(above.evaluator.as_ref()) <= above.ops {
+                    st.stats.pruned_ops_before += above.ops as u64;
                     st.stats.pruned_ops_after += own.len() as u64;
                     Regional::new(region, own, parent)
                 } else {
-                    Regional::delegating(region, own, (Arc::clone(above.0), above.1), parent)
+                    Regional::delegating(region, own, above, parent)
                 }
             }
         };
@@ -280,7 +314,10 @@ impl<'e> Beam<'e> {
         if !tr.halves((self.xs, self.ys), t, depth, aspect) {
             return Some(node);
         }
-        let below = (Arc::clone(node.answer()), node.answer_len());
+        let below = Answer {
+            evaluator: Arc::clone(node.answer()),
+            ops: node.answer_len(),
+        };
         let m = t.mid();
         let halves = [Interval::new(t.lo, m), Interval::new(m, t.hi)];
         let tape = node.pruned_tape();
@@ -288,16 +325,7 @@ impl<'e> Beam<'e> {
         let children = halves
             .into_iter()
             .zip(placed)
-            .filter_map(|(half, placed)| {
-                self.node(
-                    tr,
-                    tape,
-                    (half, placed?),
-                    (&below.0, below.1),
-                    depth - 1,
-                    st,
-                )
-            })
+            .filter_map(|(_, placed)| self.node(tr, tape, placed?, below.clone(), depth - 1, st))
             .collect();
         Some(node.with_children(children))
     }
@@ -317,6 +345,7 @@ impl<'e> Beam<'e> {
             .map(|g| g.smallest_holding(&region))
             .filter(|h| h.pruned_tape().len() <= tape.len());
         Some(Placed {
+            range: t,
             region,
             held,
             pruned: None,
