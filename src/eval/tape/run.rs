@@ -1,10 +1,6 @@
 //! Running a tape: one point or box over its registers, with values,
 //! gradients or a directional derivative, and batches of points or boxes a
 //! column per register. Every result is the reference interpreter's bits.
-//! The passes over boxes and batches run in the copy compiled for the CPU
-//! (`cpu`: AVX2 and FMA where present; the same bits on every copy).
-
-pub(super) mod cpu;
 
 use super::{Form, Instr, Reg, Tape, Workspace};
 use crate::eval::interp::{
@@ -36,26 +32,15 @@ impl Tape {
     pub fn interval(&self, b: [Interval; 3], ws: &mut Workspace) -> Interval {
         let root = self.root_reg() as Reg;
         let zero = Interval::point(0.0);
-        cpu::dispatch(
-            #[inline(always)]
-            || match fixed_registers(&mut ws.intervals, self.registers, zero) {
-                Some(m) => interval_pass(&self.code, b, m, root),
-                None => interval_pass(&self.code, b, &mut ws.intervals[..], root),
-            },
-        )
+        match fixed_registers(&mut ws.intervals, self.registers, zero) {
+            Some(m) => interval_pass(&self.code, b, m, root),
+            None => interval_pass(&self.code, b, &mut ws.intervals[..], root),
+        }
     }
 
     /// f and its gradient at `p`, the same bits as the reference
     /// interpreter's [`crate::eval::Evaluator::point_grad`].
     pub fn point_grad(&self, p: [f64; 3], ws: &mut Workspace) -> Grad {
-        cpu::dispatch(
-            #[inline(always)]
-            || self.point_grad_pass(p, ws),
-        )
-    }
-
-    #[inline(always)]
-    fn point_grad_pass(&self, p: [f64; 3], ws: &mut Workspace) -> Grad {
         // Every register is written before it is read: no clearing.
         let m = &mut ws.point_duals;
         if m.len() < self.registers {
@@ -85,19 +70,6 @@ impl Tape {
     /// bits as [`Tape::point_grad`] at each point: one pass over the tape
     /// for all of them, a column of values and partials per register.
     pub fn point_grad_batch(
-        &self,
-        [xs, ys, zs]: [&[f64]; 3],
-        out: &mut [Grad],
-        ws: &mut Workspace,
-    ) {
-        cpu::dispatch(
-            #[inline(always)]
-            || self.point_grad_batch_pass([xs, ys, zs], out, ws),
-        );
-    }
-
-    #[inline(always)]
-    fn point_grad_batch_pass(
         &self,
         [xs, ys, zs]: [&[f64]; 3],
         out: &mut [Grad],
@@ -144,10 +116,7 @@ impl Tape {
         v: [Interval; 3],
         ws: &mut Workspace,
     ) -> [Interval; 2] {
-        let (f, [d]) = cpu::dispatch(
-            #[inline(always)]
-            || self.duals(b, v.map(|vk| [vk]), &mut ws.dir),
-        );
+        let (f, [d]) = self.duals(b, v.map(|vk| [vk]), &mut ws.dir);
         [f, d]
     }
 
@@ -155,17 +124,12 @@ impl Tape {
     /// interpreter's [`crate::eval::Evaluator::interval_grad`].
     pub fn interval_grad(&self, b: [Interval; 3], ws: &mut Workspace) -> IntervalGrad {
         let (o, z) = (Interval::point(1.0), Interval::point(0.0));
-        let seed = [[o, z, z], [z, o, z], [z, z, o]];
-        let (v, d) = cpu::dispatch(
-            #[inline(always)]
-            || self.duals(b, seed, &mut ws.grad),
-        );
+        let (v, d) = self.duals(b, [[o, z, z], [z, o, z], [z, z, o]], &mut ws.grad);
         IntervalGrad { v, d }
     }
 
     // Forward mode over the registers: each value with `S` partials, those
     // of coordinate k starting as `seed[k]`.
-    #[inline(always)]
     fn duals<const S: usize>(
         &self,
         b: [Interval; 3],
@@ -191,15 +155,7 @@ impl Tape {
 
     /// `out[i] = f(xs[i], ys[i], zs[i])`, the same bits as the reference
     /// interpreter.
-    pub fn point_batch(&self, xyz: [&[f64]; 3], out: &mut [f64], ws: &mut Workspace) {
-        cpu::dispatch(
-            #[inline(always)]
-            || self.point_batch_pass(xyz, out, ws),
-        );
-    }
-
-    #[inline(always)]
-    fn point_batch_pass(&self, [xs, ys, zs]: [&[f64]; 3], out: &mut [f64], ws: &mut Workspace) {
+    pub fn point_batch(&self, [xs, ys, zs]: [&[f64]; 3], out: &mut [f64], ws: &mut Workspace) {
         let n = out.len();
         assert!(xs.len() == n && ys.len() == n && zs.len() == n);
         // Every register is written before it is read (the tape is in
@@ -226,19 +182,6 @@ impl Tape {
     /// `out[i]` contains f over `boxes[i]`, the same bits as the reference
     /// interpreter's interval.
     pub fn interval_batch(
-        &self,
-        boxes: &[[Interval; 3]],
-        out: &mut [Interval],
-        ws: &mut Workspace,
-    ) {
-        cpu::dispatch(
-            #[inline(always)]
-            || self.interval_batch_pass(boxes, out, ws),
-        );
-    }
-
-    #[inline(always)]
-    fn interval_batch_pass(
         &self,
         boxes: &[[Interval; 3]],
         out: &mut [Interval],

@@ -448,17 +448,3 @@ fn pruning_by_sign_keeps_the_sign_in_the_box() {
         "sign pruning shorter than value pruning {shorter} times"
     );
 }
-
-/// The runtime CPU switch: `IBEAM_CPU=baseline` forces the baseline copy
-/// of the passes, and otherwise a CPU with AVX2 and FMA takes theirs (CI
-/// runs these tests and the conformance suite both ways).
-#[test]
-fn cpu_switch_picks_the_path() {
-    let forced = std::env::var(run::cpu::CPU_ENV).is_ok_and(|v| v.trim() == "baseline");
-    let want = if !forced && run::cpu::avx2_fma() {
-        "avx2+fma"
-    } else {
-        "baseline"
-    };
-    assert_eq!(run::cpu::path(), want);
-}
