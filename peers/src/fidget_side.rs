@@ -1,8 +1,9 @@
 //! Fidget's side: the shape is built once (the `.vm` file read into a
 //! `Context`, or the sphere union built as a `Tree`), then each render is
 //! timed alone: Fidget's 2D image renderer for a 2D model, its voxel
-//! renderer (depth = image side, normals included) for a 3D one, both over
-//! the [-1, 1] square/cube with the identity view.
+//! renderer (depth = image side, normals included) for a 3D one, over the
+//! [-1, 1] square/cube, with the identity view from above or the corner
+//! view's `world_to_model` (`views.rs`).
 
 use std::path::Path;
 use std::time::Instant;
@@ -13,6 +14,7 @@ use fidget::raster::{pixel, voxel};
 use fidget::render::{ImageSize, ThreadPool, VoxelSize};
 use fidget::shape::BoundShape;
 
+use crate::views::{View, fidget_matrix};
 use crate::workloads::{SPHERE_RADIUS, Workload, sphere_centres};
 
 /// A built shape, ready to render.
@@ -21,6 +23,7 @@ pub struct FidgetRun {
     pool: ThreadPool,
     size: u32,
     flat: bool,
+    view: View,
     /// Time to read/build the expression and make the JIT shape, ms.
     pub build_ms: f64,
 }
@@ -48,37 +51,52 @@ fn sphere_union(centres: &[[f64; 3]]) -> Tree {
 
 impl FidgetRun {
     /// Builds the workload's shape for `threads` render threads.
-    pub fn new(
-        workload: &Workload,
-        size: u32,
-        threads: usize,
-        models: &Path,
-        seed: u64,
-    ) -> Result<FidgetRun, String> {
+    pub fn new(spec: &FidgetSpec, models: &Path) -> Result<FidgetRun, String> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(spec.threads)
+            .build()
+            .map_err(|e| e.to_string())?;
         let t0 = Instant::now();
-        let shape = match (workload, workload.vm_file()) {
-            (_, Some(file)) => {
-                let path = models.join(file);
-                let f = std::fs::File::open(&path)
-                    .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-                let (ctx, node) = Context::from_text(f).map_err(|e| format!("{e:?}"))?;
-                JitShape::new(&ctx, node).map_err(|e| format!("{e:?}"))?
+        let shape = match (&spec.workload, spec.workload.vm_file()) {
+            (_, Some(file)) => read_model(&models.join(file))?,
+            (Workload::Spheres(n), None) => {
+                JitShape::from(sphere_union(&sphere_centres(*n, spec.seed)))
             }
-            (Workload::Spheres(n), None) => JitShape::from(sphere_union(&sphere_centres(*n, seed))),
             _ => unreachable!("every workload is a model or spheres"),
         };
         let build_ms = t0.elapsed().as_secs_f64() * 1e3;
+        Ok(FidgetRun {
+            shape,
+            pool: ThreadPool::Custom(pool),
+            size: spec.size,
+            flat: spec.workload.is_2d(),
+            view: spec.view,
+            build_ms,
+        })
+    }
+
+    /// A flat model's whole job in this process, timed as one: read and
+    /// parse the `.vm` file, build the `JitShape`, render one frame (the
+    /// thread pool already exists, as ibeam's process starts its threads
+    /// inside its own figure). Returns the wall time, ms.
+    pub fn parse_build_frame(path: &Path, size: u32, threads: usize) -> Result<f64, String> {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .map_err(|e| e.to_string())?;
-        Ok(FidgetRun {
-            shape,
-            pool: ThreadPool::Custom(pool),
-            size,
-            flat: workload.is_2d(),
-            build_ms,
-        })
+        let pool = ThreadPool::Custom(pool);
+        let t0 = Instant::now();
+        let shape = read_model(path)?;
+        let bound = BoundShape::try_from(shape).map_err(|e| format!("{e:?}"))?;
+        let cfg = pixel::RenderConfig::from_size(ImageSize::from(size));
+        let eval = pixel::EvalConfig {
+            threads: Some(&pool),
+            ..Default::default()
+        };
+        let img = pixel::render(bound, &cfg, &eval).ok_or("cancelled")?;
+        let ms = t0.elapsed().as_secs_f64() * 1e3;
+        std::hint::black_box(img);
+        Ok(ms)
     }
 
     /// Renders once (and writes a picture to `save`).
@@ -103,7 +121,10 @@ impl FidgetRun {
             }
             FidgetTimes { time_ms, hit }
         } else {
-            let cfg = voxel::RenderConfig::from_size(VoxelSize::from(self.size));
+            let cfg = voxel::RenderConfig {
+                image_size: VoxelSize::from(self.size),
+                world_to_model: fidget_matrix(self.view),
+            };
             let eval = voxel::EvalConfig {
                 threads: Some(&self.pool),
                 ..Default::default()
@@ -131,6 +152,28 @@ impl FidgetRun {
             FidgetTimes { time_ms, hit }
         }
     }
+}
+
+/// What [`FidgetRun::new`] builds.
+#[derive(Clone, Debug)]
+pub struct FidgetSpec {
+    /// The workload.
+    pub workload: Workload,
+    /// Where it is seen from (3D only).
+    pub view: View,
+    /// Image side (and voxel depth).
+    pub size: u32,
+    /// Render threads.
+    pub threads: usize,
+    /// Seed of the random spheres.
+    pub seed: u64,
+}
+
+fn read_model(path: &Path) -> Result<JitShape, String> {
+    let f =
+        std::fs::File::open(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let (ctx, node) = Context::from_text(f).map_err(|e| format!("{e:?}"))?;
+    JitShape::new(&ctx, node).map_err(|e| format!("{e:?}"))
 }
 
 fn save_png<P: image::Pixel<Subpixel = u8> + image::PixelWithColorType>(

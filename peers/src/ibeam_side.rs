@@ -16,8 +16,9 @@ use std::time::{Duration, Instant};
 
 use ibeam::eval::{EvalKind, build_evaluators};
 use ibeam::render::{RenderOptions, render};
-use ibeam::scene::{Camera, Projection, Scene};
+use ibeam::scene::Scene;
 
+use crate::views::{View, camera};
 use crate::workloads::{Workload, sphere_centres, spheres_scene};
 
 /// What the child needs to know to build its workload.
@@ -25,6 +26,8 @@ use crate::workloads::{Workload, sphere_centres, spheres_scene};
 pub struct WorkerSpec {
     /// The workload.
     pub workload: Workload,
+    /// Where it is seen from.
+    pub view: View,
     /// Image side in pixels.
     pub size: u32,
     /// Render threads.
@@ -40,6 +43,8 @@ impl WorkerSpec {
         vec![
             "--worker".into(),
             self.workload.name(),
+            "--worker-view".into(),
+            self.view.name().into(),
             "--size".into(),
             self.size.to_string(),
             "--threads".into(),
@@ -52,17 +57,7 @@ impl WorkerSpec {
     }
 }
 
-/// Fidget's default 3D view: parallel rays down -z over [-1, 1]².
-fn view_down_z() -> Camera {
-    Camera {
-        eye: [0.0, 0.0, 3.0],
-        target: [0.0, 0.0, 0.0],
-        up: [0.0, 1.0, 0.0],
-        projection: Projection::Orthographic { width: 2.0 },
-    }
-}
-
-/// Loads the workload's scene, framed like Fidget's view, without shadows.
+/// Loads the workload's scene, seen as Fidget sees it, without shadows.
 pub fn load(spec: &WorkerSpec) -> Result<Scene, String> {
     let mut scene = match (&spec.workload, spec.workload.vm_file()) {
         (_, Some(file)) => {
@@ -74,9 +69,7 @@ pub fn load(spec: &WorkerSpec) -> Result<Scene, String> {
         }
         _ => unreachable!("every workload is a model or spheres"),
     };
-    // prospero.vm already gets this view; colonnade.vm would otherwise get a
-    // perspective view from a corner.
-    scene.camera = view_down_z();
+    scene.camera = camera(spec.view);
     for light in &mut scene.lights {
         light.shadows = false;
     }

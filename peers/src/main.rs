@@ -1,21 +1,26 @@
-//! ibeam against Fidget, side by side: the same workloads rendered by both,
-//! interleaved (ibeam, Fidget, ibeam, Fidget, ...), best of N each.
-//! See README.md beside Cargo.toml.
+//! ibeam against Fidget, side by side: the same workloads, from the same
+//! views, rendered by both, interleaved (ibeam warm, Fidget, ibeam cold,
+//! ibeam warm, ...), best of N each. See README.md beside Cargo.toml.
 
+mod cold;
 mod fidget_side;
 mod ibeam_side;
 mod plot;
+mod table;
+mod views;
 mod workloads;
 
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use clap::Parser;
 
-use fidget_side::FidgetRun;
+use cold::{ColdError, ColdRender};
+use fidget_side::{FidgetRun, FidgetSpec};
 use ibeam_side::{Worker, WorkerError, WorkerSpec};
-use workloads::Workload;
+use table::{ColdFigures, FidgetFigures, FlatRow, Outcome, Row, WarmFigures};
+use views::View;
+use workloads::{Workload, sphere_centres, spheres_scene};
 
 /// Renders each workload with ibeam and with Fidget and prints the times.
 #[derive(Parser, Debug)]
@@ -56,39 +61,55 @@ struct Args {
     #[arg(long, default_value_t = 120.0)]
     timeout: f64,
     /// Also run ibeam on 1000 spheres or more at sizes above 256 (skipped
-    /// by default: several minutes per render today).
+    /// by default: several seconds per render).
     #[arg(long)]
     all: bool,
+    /// Views of the 3D workloads, comma-separated: top (Fidget's default,
+    /// parallel rays down -z), corner (perspective from a corner). A flat
+    /// model is seen from the top only.
+    #[arg(long, value_delimiter = ',', default_value = "top,corner")]
+    views: Vec<String>,
+    /// Target folder of the default build of ibeam the cold mode runs
+    /// (`cargo build --release` with RUSTFLAGS empty, run by this command).
+    #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/../target"))]
+    cold_target: PathBuf,
+    /// Run this ibeam binary in the cold mode instead of building one.
+    #[arg(long)]
+    ibeam_bin: Option<PathBuf>,
+    /// Leave out the cold mode (and the default render of a flat model).
+    #[arg(long)]
+    no_cold: bool,
     /// Internal: render one workload for the parent process (see ibeam_side).
     #[arg(long, hide = true)]
     worker: Option<String>,
+    /// Internal: the worker's view.
+    #[arg(long, hide = true, default_value = "top")]
+    worker_view: String,
 }
 
 /// Sphere counts from which ibeam is skipped above SKIP_SIZE without --all.
 const SKIP_FROM: usize = 1000;
 const SKIP_SIZE: u32 = 256;
 
-/// What happened to ibeam on one workload.
-#[derive(Clone, Debug)]
-enum IbeamOutcome {
-    Done {
-        best_ms: f64,
-        compile_ms: f64,
-        load_ms: f64,
-        hit: u64,
-    },
-    Skipped,
-    Timeout,
-    Failed(String),
+/// What the run needs besides the arguments.
+struct Setup {
+    models: PathBuf,
+    limit: Duration,
+    /// The default-build binary of the cold mode.
+    cold: Option<PathBuf>,
 }
 
-/// One line of the table.
+/// One workload seen from one view.
 #[derive(Clone, Debug)]
-struct Row {
+struct Case {
     workload: Workload,
-    /// Best Fidget render, tape building time, pixels hit.
-    fidget: Result<(f64, f64, u64), String>,
-    ibeam: IbeamOutcome,
+    view: View,
+}
+
+impl Case {
+    fn name(&self) -> String {
+        format!("{}-{}", self.workload.name(), self.view.name())
+    }
 }
 
 fn main() {
@@ -98,8 +119,13 @@ fn main() {
             eprintln!("unknown workload `{name}`");
             std::process::exit(2);
         };
+        let Some(view) = View::parse(&args.worker_view) else {
+            eprintln!("unknown view `{}`", args.worker_view);
+            std::process::exit(2);
+        };
         let spec = WorkerSpec {
             workload,
+            view,
             size: args.size,
             threads: args.threads,
             models: args.models.clone(),
@@ -113,7 +139,7 @@ fn main() {
     }
 }
 
-fn selected(args: &Args) -> Result<Vec<Workload>, String> {
+fn selected(args: &Args) -> Result<Vec<Case>, String> {
     let mut list = Vec::new();
     for item in &args.only {
         match item.trim() {
@@ -127,45 +153,93 @@ fn selected(args: &Args) -> Result<Vec<Workload>, String> {
         return Err("sphere counts must be at least 1".into());
     }
     list.dedup();
-    Ok(list)
+    let views = args
+        .views
+        .iter()
+        .map(|v| View::parse(v.trim()).ok_or_else(|| format!("unknown view `{v}` (top, corner)")))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut cases = Vec::new();
+    for workload in list {
+        for &view in &views {
+            if workload.is_2d() && view != View::Top {
+                continue;
+            }
+            cases.push(Case {
+                workload: workload.clone(),
+                view,
+            });
+        }
+        if workload.is_2d() && !views.contains(&View::Top) {
+            cases.push(Case {
+                workload,
+                view: View::Top,
+            });
+        }
+    }
+    Ok(cases)
+}
+
+fn cold_binary(args: &Args) -> Result<Option<PathBuf>, String> {
+    if args.no_cold {
+        return Ok(None);
+    }
+    if let Some(bin) = &args.ibeam_bin {
+        return Ok(Some(bin.clone()));
+    }
+    eprintln!(
+        "building the default ibeam (RUSTFLAGS empty) into {}",
+        args.cold_target.display()
+    );
+    cold::build_default(&args.cold_target).map(Some)
 }
 
 fn run(args: &Args) -> Result<(), String> {
-    let list = selected(args)?;
+    let cases = selected(args)?;
     std::fs::create_dir_all(&args.out)
         .map_err(|e| format!("cannot create {}: {e}", args.out.display()))?;
-    let models = args
-        .models
-        .canonicalize()
-        .unwrap_or_else(|_| args.models.clone());
-    let limit = Duration::from_secs_f64(args.timeout.max(0.001));
+    let setup = Setup {
+        models: args
+            .models
+            .canonicalize()
+            .unwrap_or_else(|_| args.models.clone()),
+        limit: Duration::from_secs_f64(args.timeout.max(0.001)),
+        cold: cold_binary(args)?,
+    };
     println!(
         "ibeam vs Fidget 0.5.1: {0}x{0} px, best of {1}, {2} threads each, seed {3}, ibeam timeout {4} s",
         args.size, args.reps, args.threads, args.seed, args.timeout
     );
+    if let Some(bin) = &setup.cold {
+        println!("cold mode: {} (default build)", bin.display());
+    }
     let skipping = !args.all && args.size > SKIP_SIZE;
-    if skipping
-        && list
-            .iter()
-            .any(|w| matches!(w, Workload::Spheres(n) if *n >= SKIP_FROM))
-    {
+    if skipping && cases.iter().any(|c| big(&c.workload)) {
         println!(
-            "ibeam is skipped for {SKIP_FROM} spheres or more at sizes above {SKIP_SIZE} \
-             (minutes per render today); --all runs it"
+            "ibeam is skipped for {SKIP_FROM} spheres or more at sizes above {SKIP_SIZE}; --all runs it"
         );
     }
     let mut rows = Vec::new();
-    for w in list {
-        let skip = skipping && matches!(w, Workload::Spheres(n) if n >= SKIP_FROM);
-        eprintln!("-- {}", w.name());
-        let row = run_workload(args, &w, &models, limit, skip);
-        eprintln!("   {}", describe(&row));
+    for case in cases {
+        let skip = skipping && big(&case.workload);
+        eprintln!("-- {}", case.name());
+        let row = run_case(args, &setup, &case, skip);
+        eprintln!("   {}", table::describe(&row));
         rows.push(row);
     }
-    let table = table(&rows, args);
-    println!("\n{table}");
-    write(&args.out.join("results.md"), &table)?;
-    write(&args.out.join("results.csv"), &csv(&rows, args))?;
+    let flat = match &setup.cold {
+        Some(bin) if rows.iter().any(|r| r.workload.is_2d()) => {
+            eprintln!("-- default render of prospero");
+            Some(run_flat(args, &setup, bin))
+        }
+        _ => None,
+    };
+    let text = table::markdown(&rows, flat.as_ref(), args.size, args.timeout);
+    println!("\n{text}");
+    write(&args.out.join("results.md"), &text)?;
+    write(
+        &args.out.join("results.csv"),
+        &table::csv(&rows, args.size, args.reps, args.threads),
+    )?;
     let plot_path = args.out.join("spheres.png");
     match plot::plot_spheres(&rows_for_plot(&rows), args.size, &plot_path) {
         Ok(true) => println!("plot: {}", plot_path.display()),
@@ -176,228 +250,197 @@ fn run(args: &Args) -> Result<(), String> {
     Ok(())
 }
 
-fn run_workload(args: &Args, w: &Workload, models: &Path, limit: Duration, skip: bool) -> Row {
-    let fidget = FidgetRun::new(w, args.size, args.threads, models, args.seed);
-    let spec = WorkerSpec {
-        workload: w.clone(),
+fn big(w: &Workload) -> bool {
+    matches!(w, Workload::Spheres(n) if *n >= SKIP_FROM)
+}
+
+/// The scene file the cold mode renders: the model, or the sphere union
+/// written into the output folder.
+fn scene_file(args: &Args, setup: &Setup, w: &Workload) -> Result<PathBuf, String> {
+    match (w, w.vm_file()) {
+        (_, Some(file)) => Ok(setup.models.join(file)),
+        (Workload::Spheres(n), None) => {
+            let path = args.out.join(format!("{}.ib", w.name()));
+            write(&path, &spheres_scene(&sphere_centres(*n, args.seed)))?;
+            Ok(path)
+        }
+        _ => unreachable!("every workload is a model or spheres"),
+    }
+}
+
+/// The best of each renderer's figures over the reps.
+#[derive(Default)]
+struct Best {
+    warm: Option<WarmFigures>,
+    cold: Option<ColdFigures>,
+    fidget: Option<FidgetFigures>,
+}
+
+// long-fn: one loop interleaves the three renderers rep by rep, so that
+// load on the shared machine falls on all three alike.
+fn run_case(args: &Args, setup: &Setup, case: &Case, skip: bool) -> Row {
+    let fspec = FidgetSpec {
+        workload: case.workload.clone(),
+        view: case.view,
         size: args.size,
         threads: args.threads,
-        models: models.to_path_buf(),
         seed: args.seed,
     };
-    let mut ibeam = if skip {
-        Err(IbeamOutcome::Skipped)
-    } else {
-        Worker::start(&spec, limit).map_err(outcome_of)
+    let fidget = FidgetRun::new(&fspec, &setup.models);
+    let spec = WorkerSpec {
+        workload: case.workload.clone(),
+        view: case.view,
+        size: args.size,
+        threads: args.threads,
+        models: setup.models.clone(),
+        seed: args.seed,
     };
-    let mut ibeam_best = f64::INFINITY;
-    let mut ibeam_compile = 0.0;
-    let mut ibeam_hit = 0;
-    let mut fidget_best = f64::INFINITY;
-    let mut fidget_hit = 0;
-    // Rep 0 warms both up and is not timed: ibeam compiles the kinds a
-    // render waits for on their first use (its compile time is reported on
-    // its own), and a render's time then subtracts that wait only
-    // approximately when other threads go on rendering meanwhile.
+    let mut warm = if skip {
+        Err(Outcome::Skipped)
+    } else {
+        Worker::start(&spec, setup.limit).map_err(warm_outcome)
+    };
+    let scene = scene_file(args, setup, &case.workload);
+    let mut cold: Result<(&Path, PathBuf), Outcome<ColdFigures>> = match (&setup.cold, scene) {
+        _ if skip => Err(Outcome::Skipped),
+        (None, _) => Err(Outcome::Skipped),
+        (Some(_), Err(e)) => Err(Outcome::Failed(e)),
+        (Some(bin), Ok(scene)) => Ok((bin.as_path(), scene)),
+    };
+    let mut best = Best::default();
+    let mut warm_compile = 0.0;
+    // Rep 0 warms the warm child and Fidget up and is not timed: the child
+    // compiles the kinds a render waits for on their first use (reported
+    // on its own). Every cold render is a first render, so the cold mode
+    // runs on the timed reps only.
     for rep in 0..=args.reps {
         let (timed, last) = (rep > 0, rep == args.reps);
-        let image = |who: &str| last.then(|| args.out.join(format!("{}-{who}.png", w.name())));
-        if let Ok(worker) = &mut ibeam {
-            match worker.render(image("ibeam").as_deref(), limit) {
+        let image = |who: &str| last.then(|| args.out.join(format!("{}-{who}.png", case.name())));
+        if let Ok(worker) = &mut warm {
+            match worker.render(image("ibeam").as_deref(), setup.limit) {
                 Ok(t) => {
-                    if timed {
-                        ibeam_best = ibeam_best.min(t.time_ms);
+                    warm_compile += t.compile_ms;
+                    if timed && best.warm.as_ref().is_none_or(|b| t.time_ms < b.best_ms) {
+                        best.warm = Some(WarmFigures {
+                            best_ms: t.time_ms,
+                            compile_ms: 0.0,
+                            load_ms: worker.load_ms,
+                            hit: t.hit,
+                        });
                     }
-                    ibeam_compile += t.compile_ms;
-                    ibeam_hit = t.hit;
-                    eprintln!("   ibeam  rep {rep}: {:.1} ms", t.time_ms);
+                    eprintln!("   ibeam warm rep {rep}: {:.1} ms", t.time_ms);
                 }
-                Err(e) => ibeam = Err(outcome_of(e)),
+                Err(e) => warm = Err(warm_outcome(e)),
             }
         }
         if let Ok(f) = &fidget {
             let t = f.render(image("fidget").as_deref());
-            if timed {
-                fidget_best = fidget_best.min(t.time_ms);
+            if timed && best.fidget.as_ref().is_none_or(|b| t.time_ms < b.best_ms) {
+                best.fidget = Some(FidgetFigures {
+                    best_ms: t.time_ms,
+                    build_ms: f.build_ms,
+                    hit: t.hit,
+                });
             }
-            fidget_hit = t.hit;
             eprintln!("   fidget rep {rep}: {:.1} ms", t.time_ms);
         }
+        if let (true, Ok((bin, scene))) = (timed, &cold) {
+            let stem = format!("{}-cold", case.name());
+            let render = ColdRender {
+                exe: bin,
+                scene,
+                view: case.view,
+                layers: !case.workload.is_2d(),
+                size: args.size,
+                threads: args.threads,
+                out: &args.out,
+                stem: &stem,
+            };
+            match render.run(setup.limit) {
+                Ok(t) => {
+                    eprintln!(
+                        "   ibeam cold rep {rep}: {:.1} ms, process {:.1} ms",
+                        t.time_ms, t.wall_ms
+                    );
+                    best.cold = Some(table::best_cold(best.cold.take(), &t));
+                }
+                Err(e) => cold = Err(cold_outcome(e)),
+            }
+        }
     }
-    let ibeam = match ibeam {
-        Ok(worker) => IbeamOutcome::Done {
-            best_ms: ibeam_best,
-            compile_ms: ibeam_compile,
-            load_ms: worker.load_ms,
-            hit: ibeam_hit,
-        },
-        Err(o) => o,
-    };
     Row {
-        workload: w.clone(),
-        fidget: fidget.map(|f| (fidget_best, f.build_ms, fidget_hit)),
-        ibeam,
+        workload: case.workload.clone(),
+        view: case.view,
+        fidget: match fidget {
+            Ok(_) => best.fidget.ok_or_else(|| "no render".to_string()),
+            Err(e) => Err(e),
+        },
+        warm: match (warm, best.warm) {
+            (Ok(_), Some(w)) => Outcome::Done(WarmFigures {
+                compile_ms: warm_compile,
+                ..w
+            }),
+            (Ok(_), None) => Outcome::Failed("no render".into()),
+            (Err(o), _) => o,
+        },
+        cold: match (cold, best.cold) {
+            (Ok(_), Some(c)) => Outcome::Done(c),
+            (Ok(_), None) => Outcome::Failed("no render".into()),
+            (Err(o), _) => o,
+        },
     }
 }
 
-fn outcome_of(e: WorkerError) -> IbeamOutcome {
+/// The issue's default render of a flat model: the whole `ibeam render
+/// prospero.vm -o p.png --size SxS` process against Fidget's parse, build
+/// and one frame in this process, alternating, best of `--reps` each.
+fn run_flat(args: &Args, setup: &Setup, bin: &Path) -> FlatRow {
+    let model = setup.models.join("prospero.vm");
+    let png = args.out.join("prospero-default.png");
+    let mut row = FlatRow {
+        fidget_ms: Err("not run".into()),
+        ibeam_ms: Outcome::Failed("not run".into()),
+    };
+    for rep in 1..=args.reps {
+        let t = cold::default_render(bin, &model, &png, args.size);
+        eprintln!("   ibeam default render rep {rep}: {t:?} ms");
+        row.ibeam_ms = match (t, &row.ibeam_ms) {
+            (Ok(t), Outcome::Done(b)) => Outcome::Done(t.min(*b)),
+            (Ok(t), _) => Outcome::Done(t),
+            (Err(e), _) => cold_outcome(e),
+        };
+        let f = FidgetRun::parse_build_frame(&model, args.size, args.threads);
+        eprintln!("   fidget parse, build, frame rep {rep}: {f:?} ms");
+        row.fidget_ms = match (f, &row.fidget_ms) {
+            (Ok(f), Ok(b)) => Ok(f.min(*b)),
+            (f, _) => f,
+        };
+    }
+    row
+}
+
+fn warm_outcome<T>(e: WorkerError) -> Outcome<T> {
     match e {
-        WorkerError::Timeout => IbeamOutcome::Timeout,
-        WorkerError::Failed(m) => IbeamOutcome::Failed(m),
+        WorkerError::Timeout => Outcome::Timeout,
+        WorkerError::Failed(m) => Outcome::Failed(m),
     }
 }
 
-fn describe(row: &Row) -> String {
-    let f = match &row.fidget {
-        Ok((ms, _, _)) => format!("Fidget {ms:.1} ms"),
-        Err(e) => format!("Fidget failed: {e}"),
-    };
-    let i = match &row.ibeam {
-        IbeamOutcome::Done { best_ms, .. } => format!("ibeam {best_ms:.1} ms"),
-        IbeamOutcome::Skipped => "ibeam skipped".into(),
-        IbeamOutcome::Timeout => "ibeam timeout".into(),
-        IbeamOutcome::Failed(e) => format!("ibeam failed: {e}"),
-    };
-    format!("{f}, {i}")
-}
-
-fn table(rows: &[Row], args: &Args) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "| workload | Fidget ms | ibeam ms | ibeam/Fidget | ibeam compile ms | ibeam load ms | Fidget build ms | hit px Fidget / ibeam |"
-    );
-    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|");
-    for r in rows {
-        let (f_ms, f_build, f_hit) = match &r.fidget {
-            Ok((ms, build, hit)) => (format!("{ms:.1}"), format!("{build:.1}"), hit.to_string()),
-            Err(_) => ("failed".into(), "".into(), "".into()),
-        };
-        let (i_ms, ratio, compile, load, i_hit) = match &r.ibeam {
-            IbeamOutcome::Done {
-                best_ms,
-                compile_ms,
-                load_ms,
-                hit,
-            } => {
-                let ratio = match &r.fidget {
-                    Ok((f, _, _)) if *f > 0.0 => format!("{:.2}", best_ms / f),
-                    _ => String::new(),
-                };
-                (
-                    format!("{best_ms:.1}"),
-                    ratio,
-                    format!("{compile_ms:.1}"),
-                    format!("{load_ms:.1}"),
-                    hit.to_string(),
-                )
-            }
-            IbeamOutcome::Skipped => ("skipped".into(), "".into(), "".into(), "".into(), "".into()),
-            IbeamOutcome::Timeout => (
-                format!("timeout (>{} s)", args.timeout),
-                format!(">{:.0}", timeout_ratio(r, args)),
-                "".into(),
-                "".into(),
-                "".into(),
-            ),
-            IbeamOutcome::Failed(_) => {
-                ("failed".into(), "".into(), "".into(), "".into(), "".into())
-            }
-        };
-        let _ = writeln!(
-            s,
-            "| {} | {f_ms} | {i_ms} | {ratio} | {compile} | {load} | {f_build} | {f_hit} / {i_hit} |",
-            label(&r.workload, args.size)
-        );
+fn cold_outcome<T>(e: ColdError) -> Outcome<T> {
+    match e {
+        ColdError::Timeout => Outcome::Timeout,
+        ColdError::Failed(m) => Outcome::Failed(m),
     }
-    s
-}
-
-fn timeout_ratio(r: &Row, args: &Args) -> f64 {
-    match &r.fidget {
-        Ok((f, _, _)) if *f > 0.0 => args.timeout * 1e3 / f,
-        _ => f64::NAN,
-    }
-}
-
-fn label(w: &Workload, size: u32) -> String {
-    match w {
-        Workload::Prospero => format!("prospero 2D {size}²"),
-        Workload::Colonnade => format!("colonnade 3D {size}² (Fidget voxels, depth {size})"),
-        Workload::Spheres(n) => format!("{n} spheres {size}²"),
-    }
-}
-
-fn csv(rows: &[Row], args: &Args) -> String {
-    let mut s = String::from(
-        "workload,size,reps,threads,fidget_ms,fidget_build_ms,fidget_hit,ibeam_status,ibeam_ms,ibeam_compile_ms,ibeam_load_ms,ibeam_hit\n",
-    );
-    for r in rows {
-        let (f_ms, f_build, f_hit) = match &r.fidget {
-            Ok((a, b, c)) => (a.to_string(), b.to_string(), c.to_string()),
-            Err(_) => Default::default(),
-        };
-        let (status, i_ms, compile, load, hit) = match &r.ibeam {
-            IbeamOutcome::Done {
-                best_ms,
-                compile_ms,
-                load_ms,
-                hit,
-            } => (
-                "ok",
-                best_ms.to_string(),
-                compile_ms.to_string(),
-                load_ms.to_string(),
-                hit.to_string(),
-            ),
-            IbeamOutcome::Skipped => (
-                "skipped",
-                Default::default(),
-                Default::default(),
-                Default::default(),
-                Default::default(),
-            ),
-            IbeamOutcome::Timeout => (
-                "timeout",
-                Default::default(),
-                Default::default(),
-                Default::default(),
-                Default::default(),
-            ),
-            IbeamOutcome::Failed(_) => (
-                "failed",
-                Default::default(),
-                Default::default(),
-                Default::default(),
-                Default::default(),
-            ),
-        };
-        let _ = writeln!(
-            s,
-            "{},{},{},{},{f_ms},{f_build},{f_hit},{status},{i_ms},{compile},{load},{hit}",
-            r.workload.name(),
-            args.size,
-            args.reps,
-            args.threads
-        );
-    }
-    s
 }
 
 fn rows_for_plot(rows: &[Row]) -> Vec<plot::Point> {
     rows.iter()
-        .filter_map(|r| match r.workload {
-            Workload::Spheres(n) => Some(plot::Point {
-                n,
-                fidget_ms: r.fidget.as_ref().ok().map(|f| f.0),
-                ibeam_ms: match r.ibeam {
-                    IbeamOutcome::Done { best_ms, .. } => Some(best_ms),
-                    _ => None,
-                },
-                ibeam_compile_ms: match r.ibeam {
-                    IbeamOutcome::Done { compile_ms, .. } => Some(compile_ms),
-                    _ => None,
-                },
+        .filter_map(|r| match (&r.workload, r.view) {
+            (Workload::Spheres(n), View::Top) => Some(plot::Point {
+                n: *n,
+                fidget_ms: r.fidget.as_ref().ok().map(|f| f.best_ms),
+                ibeam_ms: r.warm.done().map(|w| w.best_ms),
+                ibeam_compile_ms: r.warm.done().map(|w| w.compile_ms),
             }),
             _ => None,
         })
