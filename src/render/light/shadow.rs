@@ -246,6 +246,7 @@ fn sweep_segments(
         seg: &seg,
         sw: &mut sw,
         st,
+        maybe: Vec::new(),
     };
     let free = sweep::sweep(tr, pieces, &mut search, &mut SweepState::new()).is_none();
     (free, sw.blocked_at)
@@ -290,12 +291,16 @@ struct FreeSearch<'a, 's> {
     seg: &'a Segments<'s>,
     sw: &'a mut SegmentSweep,
     st: &'a mut TileState,
+    // The objects that may vanish on the current piece (a buffer kept
+    // from piece to piece).
+    maybe: Vec<usize>,
 }
 
 impl Search for FreeSearch<'_, '_> {
     // Found: the segments are blocked.
     type Found = ();
 
+    #[inline]
     fn visit(&mut self, tr: &Scope<'_>, (a, c): sweep::Piece, at: &mut SweepState) -> Visit<()> {
         if at.pieces > MAX_SHADOW_PIECES {
             return Visit::Stop(());
@@ -317,14 +322,17 @@ impl Search for FreeSearch<'_, '_> {
             // narrower by the same ratio.
             at.specialised_width = c - a;
         }
-        let maybe: Vec<usize> = (0..tr.ctx.evals.len())
-            .filter(|&k| !proof::holds_no_surface(tr.ctx.interval(k, clip, &mut self.st.stats)))
-            .collect();
-        if maybe.is_empty() {
+        self.maybe.clear();
+        for k in 0..tr.ctx.evals.len() {
+            if !proof::holds_no_surface(tr.ctx.interval(k, clip, &mut self.st.stats)) {
+                self.maybe.push(k);
+            }
+        }
+        if self.maybe.is_empty() {
             self.sw.front = Front::Unknown;
             return Visit::Drop;
         }
-        match seg.piece(tr, (a, c), bx, &maybe, self.sw, &mut self.st.stats) {
+        match seg.piece(tr, (a, c), bx, &self.maybe, self.sw, &mut self.st.stats) {
             Piece::Blocked => Visit::Stop(()),
             // Positive at its start and increasing over its whole box
             // (not only the part inside the bounds): positive at its end.

@@ -414,6 +414,7 @@ struct AllDecreasing<'a> {
 impl Search for AllDecreasing<'_> {
     type Found = ();
 
+    #[inline]
     fn visit(&mut self, tr: &Scope<'_>, (a, b): (f64, f64), _: &mut SweepState) -> Visit<()> {
         if decreasing(tr, self.corners, Interval::new(a, b), self.live, self.st) {
             Visit::Drop

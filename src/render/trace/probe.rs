@@ -226,6 +226,7 @@ struct FirstCandidate<W, E> {
 impl<W: Fn(f64) -> f64, E: FnMut(Interval) -> bool> Search for FirstCandidate<W, E> {
     type Found = (f64, f64);
 
+    #[inline]
     fn visit(
         &mut self,
         _: &Scope<'_>,

@@ -158,6 +158,7 @@ struct RaySearch<'r, 's> {
 impl Search for RaySearch<'_, '_> {
     type Found = Hit;
 
+    #[inline]
     fn visit(&mut self, tr: &Scope<'_>, (a, b): Piece, at: &mut SweepState) -> Visit<Hit> {
         let (ray, live) = (self.ray, self.live);
         let bx = ray_box(ray.o, ray.d, Interval::new(a, b));
