@@ -112,6 +112,19 @@ pub(super) struct TileArea {
 /// a whole tile cost more than tracing its few split pixels.
 const FINE_GROUP: u32 = 2;
 
+// The options a fine tile is traced with: only the buffers the pixels'
+// means are taken from.
+fn fine_options(opts: &RenderOptions) -> RenderOptions {
+    RenderOptions {
+        want_depth: false,
+        want_normals: false,
+        want_classify: false,
+        want_buffers: true,
+        progress: false,
+        ..opts.clone()
+    }
+}
+
 // The sub-samples of the job's split pixels, traced with `fine` at the
 // job's factor × the resolution, square by square of `FINE_GROUP` pixels,
 // other sub-samples masked out: per pixel of the tile the mean linear
@@ -138,15 +151,7 @@ pub(super) fn trace_split(
     let mut linear = vec![[0.0; 3]; n];
     let mut coverage = vec![0.0; n];
     let mut depth = vec![f64::INFINITY; n];
-    let fine_opts = RenderOptions {
-        want_depth: false,
-        want_normals: false,
-        want_classify: false,
-        // The pixels' means are taken from the fine render's buffers.
-        want_buffers: true,
-        progress: false,
-        ..opts.clone()
-    };
+    let fine_opts = fine_options(opts);
     let in_tile = |(i, j): (u32, u32)| (j * w + i) as usize;
     let squares: Vec<Rect> = squares(w, h, FINE_GROUP).collect();
     // The squares are traced in parallel: a tile's split pixels can be
