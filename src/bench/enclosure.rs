@@ -67,7 +67,10 @@ pub fn parse(text: &str) -> Result<Vec<Surface>, String> {
             .map(str::parse)
             .collect::<Result<_, _>>()
             .map_err(|e| format!("line {}: {e}", n + 1))?;
-        if v.len() != 8 || v.chunks(2).any(|p| !(p[0] <= p[1])) {
+        if v.len() != 8
+            || v.chunks(2)
+                .any(|p| p[0].partial_cmp(&p[1]).is_none_or(|o| o.is_gt()))
+        {
             return Err(format!("line {}: expected 4 ordered pairs", n + 1));
         }
         let iv = |i: usize| Interval::new(v[2 * i], v[2 * i + 1]);

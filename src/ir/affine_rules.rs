@@ -327,6 +327,9 @@ fn chebyshev(a: &AffineValue, s: &Shape) -> Affine {
     }
     let (pl, ph) = (Interval::point(r.lo), Interval::point(r.hi));
     let (fl, fh) = ((s.f)(pl), (s.f)(ph));
+    if fl.is_empty() || fh.is_empty() {
+        return Affine::UNBOUNDED;
+    }
     let alpha = if r.hi > r.lo {
         (fh.mid() - fl.mid()) / (r.hi - r.lo)
     } else {
