@@ -6,16 +6,24 @@
 //! has no affine kind.
 //!
 //! Every enclosure contains every point value of f in the box (as the
-//! interval kinds do), and lies inside the interval rule's enclosure
-//! wherever that is not EMPTY; it is EMPTY where an op's interval rule,
-//! over its operands' affine enclosures, is.
+//! interval kinds do), and lies inside the interval evaluation's
+//! enclosure: [`AffineEvaluator::affine`] intersects the root's affine
+//! value with it ([`clip`]). The per-op intersection alone does not give
+//! that: the interval rules are not inclusion-isotone at exact zeros (a
+//! quotient by `[0, h]` is exactly `[0, +inf]`, by the tighter `[ε, h]` its
+//! lower bound rounds out to -2⁻⁵¹¹ or so), so a tighter operand can give
+//! a lower bound a hair wider. It is EMPTY where the interval evaluation
+//! is, or where an op's interval rule, over its operands' affine
+//! enclosures, is.
 
 use std::cell::RefCell;
 
+use crate::eval::Evaluator;
 use crate::eval::interp::Interpreter;
-use crate::eval::tape::{Instr, Reg, Tape};
+use crate::eval::tape::{Instr, Reg, Tape, with_workspace};
 use crate::eval::taped::TapeEvaluator;
 use crate::interval::Interval;
+use crate::interval::affine::meet;
 use crate::ir::affine_rules::{AffineValue, affine_binary, affine_powi, affine_unary, run_affine};
 use crate::ir::{BinaryOp, UnaryOp};
 
@@ -24,10 +32,9 @@ pub trait AffineEvaluator {
     /// f's affine form over the box `b = [X, Y, Z]`, and its interval.
     fn affine_value(&self, b: [Interval; 3]) -> AffineValue;
 
-    /// An interval containing f over `b`, from affine arithmetic.
-    fn affine(&self, b: [Interval; 3]) -> Interval {
-        self.affine_value(b).range
-    }
+    /// An interval containing f over `b`: the affine value's, clipped to
+    /// the interval evaluation's ([`clip`]).
+    fn affine(&self, b: [Interval; 3]) -> Interval;
 
     /// `out[i] = affine(boxes[i])` for every i.
     fn affine_batch(&self, boxes: &[[Interval; 3]], out: &mut [Interval]) {
@@ -36,6 +43,18 @@ pub trait AffineEvaluator {
             *o = self.affine(*b);
         }
     }
+}
+
+/// The root's affine enclosure `affine` clipped to the interval
+/// evaluation's `plain` of the same function over the same box: EMPTY if
+/// either is (each means f is undefined on the whole box), else their
+/// intersection, or `plain` where they do not meet (as
+/// `ir::affine_rules` does per op, so that EMPTY keeps its meaning).
+pub fn clip(affine: Interval, plain: Interval) -> Interval {
+    if affine.is_empty() || plain.is_empty() {
+        return Interval::EMPTY;
+    }
+    meet(affine, plain).unwrap_or(plain)
 }
 
 thread_local! {
@@ -51,6 +70,10 @@ impl AffineEvaluator for Interpreter {
             run_affine(&f.ops, b, vals);
             vals[f.root.index()]
         })
+    }
+
+    fn affine(&self, b: [Interval; 3]) -> Interval {
+        clip(self.affine_value(b).range, Evaluator::interval(self, b))
     }
 }
 
@@ -96,6 +119,11 @@ impl AffineEvaluator for Tape {
         })
     }
 
+    fn affine(&self, b: [Interval; 3]) -> Interval {
+        let plain = with_workspace(|ws| self.interval(b, ws));
+        clip(self.affine_value(b).range, plain)
+    }
+
     /// One pass over the tape for the whole batch, a column of the batch
     /// per register (as [`Tape::interval_batch`]); each box's own bits.
     fn affine_batch(&self, boxes: &[[Interval; 3]], out: &mut [Interval]) {
@@ -115,13 +143,22 @@ impl AffineEvaluator for Tape {
             for (o, v) in out.iter_mut().zip(&m[r..r + n]) {
                 *o = v.range;
             }
-        })
+        });
+        let mut plain = vec![Interval::EMPTY; n];
+        with_workspace(|ws| self.interval_batch(boxes, &mut plain, ws));
+        for (o, p) in out.iter_mut().zip(plain) {
+            *o = clip(*o, p);
+        }
     }
 }
 
 impl AffineEvaluator for TapeEvaluator {
     fn affine_value(&self, b: [Interval; 3]) -> AffineValue {
         self.tape().affine_value(b)
+    }
+
+    fn affine(&self, b: [Interval; 3]) -> Interval {
+        self.tape().affine(b)
     }
 
     fn affine_batch(&self, boxes: &[[Interval; 3]], out: &mut [Interval]) {
