@@ -22,6 +22,7 @@ use ibeam::ir::{BinaryOp, Builder, Function, Op, UnaryOp, ValueId, Var};
 
 use common::tight::{self, Tight};
 use common::{box_points, random_box, same_iv};
+use proptest::prelude::*;
 
 /// An evaluator whose interval kind is another's affine enclosure (the
 /// rest is the other's), so that the conformance suite checks it.
@@ -297,5 +298,52 @@ fn affine_is_never_wider_than_the_interval_evaluation() {
             iv.lo <= a.lo && a.hi <= iv.hi,
             "affine {a:?}, interval {iv:?}"
         );
+    }
+}
+
+/// The Kummer quartic and the Klein sextic of `ibeam bench enclosure`
+/// (the reference file's formulas, lowered and simplified as renders use
+/// them).
+fn bench_surfaces() -> Vec<Function> {
+    let text = std::fs::read_to_string(DEFAULT_DATA).unwrap();
+    parse(&text)
+        .unwrap()
+        .into_iter()
+        .filter(|s| s.name == "kummer" || s.name == "klein")
+        .map(|s| {
+            let src = format!("object f = {};", s.formula);
+            let scene = ibeam::lang::load_scene_source("t.ib", &src).unwrap();
+            ibeam::ir::passes::simplify(&scene.objects[0].function)
+        })
+        .collect()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 300,
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    /// Boxes of any width from 1e-9 to 1 around the surfaces: the affine
+    /// enclosure holds the tight oracle's enclosure of f at the corners
+    /// and at points inside.
+    #[test]
+    fn bench_surfaces_hold_exact_values(
+        centre in prop::array::uniform3(-1.5f64..1.5),
+        log_width in -9.0f64..0.0,
+        ts in prop::collection::vec(prop::array::uniform3(0.0f64..=1.0), 4),
+    ) {
+        let w = 10f64.powf(log_width);
+        let b = centre.map(|c| Interval::new(c - w, c + w));
+        for f in bench_surfaces() {
+            let a = Interpreter::new(f.clone()).affine(b);
+            let corners = (0..8).map(|k: usize| [0, 1, 2].map(|i| [b[i].lo, b[i].hi][k >> i & 1]));
+            let inner = ts.iter().map(|t| [0, 1, 2].map(|i| common::sample(b[i], t[i])));
+            for p in corners.chain(inner) {
+                let (lo, hi) = tight_at(&f, p).expect("polynomial ops only");
+                prop_assert!(a.lo <= lo && hi <= a.hi, "{a:?} lacks [{lo:e}, {hi:e}] at {p:?}");
+            }
+        }
     }
 }
