@@ -50,16 +50,21 @@ fn mul_up(x: f64, y: f64) -> f64 {
     up(x * y)
 }
 
-/// Error terms summed with upward rounding: every term and the sum are
-/// upper bounds, and `up_sum` covers each addition's rounding.
+/// Error terms summed in round-to-nearest, bounded once at the end
+/// ([`ErrSum::total`]): rounding each partial sum upward made every op a
+/// chain of dependent roundings (most of an affine evaluation's time).
 #[derive(Copy, Clone, Debug, Default)]
-struct ErrSum(f64);
+struct ErrSum {
+    sum: f64,
+    terms: u32,
+}
 
 impl ErrSum {
     /// Adds the non-negative upper bound `v`.
     #[inline]
     fn add(&mut self, v: f64) {
-        self.0 = up_sum(self.0 + v);
+        self.sum += v;
+        self.terms += 1;
     }
 
     /// Returns the rounded result `z` of a `+ - *`, adding its error.
@@ -67,6 +72,19 @@ impl ErrSum {
     fn rounded(&mut self, z: f64) -> f64 {
         self.add(rounding(z));
         z
+    }
+
+    /// An upper bound of the exact sum of the terms. Why it is sound:
+    /// the terms are not negative, so each of the `n - 1` additions
+    /// rounds a partial sum of the exact terms by a factor `1 + δ`, `|δ|
+    /// ≤ 2⁻⁵³`, never underflowing (a sum of non-negative floats below
+    /// 2⁻¹⁰²² is exact); the computed sum is then at least the exact one
+    /// times `(1 - 2⁻⁵³)^(n-1)`, and the exact one at most the computed
+    /// one times `1 + n·2⁻⁵²` (for n far below 2⁵¹), a product [`up`]
+    /// rounds upward. NaN and +inf stay.
+    #[inline]
+    fn total(&self) -> f64 {
+        up(self.sum * (1.0 + f64::from(self.terms) * STEP))
     }
 }
 
@@ -140,7 +158,7 @@ impl Affine {
         for k in self.k {
             r.add(k.abs());
         }
-        r.0
+        r.total()
     }
 
     /// An upper bound of the form's radius, `Σ|k_i| + e`.
@@ -178,7 +196,12 @@ impl Affine {
         err.add(o.e);
         let c = err.rounded(self.c + o.c);
         let k = std::array::from_fn(|i| err.rounded(self.k[i] + o.k[i]));
-        Affine { c, k, e: err.0 }.checked()
+        Affine {
+            c,
+            k,
+            e: err.total(),
+        }
+        .checked()
     }
 
     /// `self - o`.
@@ -195,7 +218,12 @@ impl Affine {
         let ac = err.rounded(alpha * self.c);
         let c = err.rounded(ac + beta);
         let k = self.k.map(|k| err.rounded(alpha * k));
-        Affine { c, k, e: err.0 }.checked()
+        Affine {
+            c,
+            k,
+            e: err.total(),
+        }
+        .checked()
     }
 
     /// `self · o`: the linear part `a0·b0 + a0·Σb_i ε_i + b0·Σa_i ε_i`,
@@ -234,9 +262,10 @@ impl Affine {
         cross.add(mul_up(a.reach(), b.e));
         cross.add(mul_up(b.reach(), a.e));
         cross.add(mul_up(a.e, b.e));
-        neg.add(cross.0);
-        pos.add(cross.0);
-        Affine::centred(c0, k, err, [neg.0, pos.0]).checked()
+        let cross = cross.total();
+        neg.add(cross);
+        pos.add(cross);
+        Affine::centred(c0, k, err, [neg.total(), pos.total()]).checked()
     }
 
     /// `self²`: as [`Affine::mul`] with itself, where the quadratic rest
@@ -258,7 +287,11 @@ impl Affine {
         // Distances from m to either end of the rest, rounded up.
         err.add(mx(up_sum(pos - m), up_sum(m + neg)));
         let c = err.rounded(c0 + m);
-        Affine { c, k, e: err.0 }
+        Affine {
+            c,
+            k,
+            e: err.total(),
+        }
     }
 
     /// The form with `slack` added to its error (the rounding of the point
