@@ -8,9 +8,10 @@
 //! A form built from the box `B` by these ops encloses its value at every
 //! point `p` of `B`: with `ε(p)` the point's noise symbols, the value lies
 //! in `c + k·ε(p) ± e`. Each coefficient is computed in round-to-nearest
-//! and its rounding error, bounded by [`rounding`], is added to `e` with
-//! upward rounding ([`up`], [`up_sum`]); nothing here relies on a
-//! rounding mode. A form whose centre or coefficients overflow becomes
+//! and its rounding error, bounded by [`rounding`], is added to `e`: an
+//! op's error terms are summed in round-to-nearest and the sum bounded
+//! upward once (`ErrSum::total`); nothing here relies on a rounding
+//! mode. A form whose centre or coefficients overflow becomes
 //! [`Affine::UNBOUNDED`] (`e = +inf`), which encloses everything.
 //!
 //! The nonlinear rules that need an op's shape (Chebyshev and mean-value
