@@ -2,4 +2,5 @@
 //! against error of every method and anti-aliasing mode) and its plot.
 
 pub mod accuracy;
+pub mod enclosure;
 pub mod plot;

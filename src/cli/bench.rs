@@ -35,6 +35,21 @@ pub enum What {
     /// Run time against error of every method and anti-aliasing mode, with
     /// a CSV and a log-log plot.
     Accuracy(super::accuracy::Args),
+    /// Width of the interval and affine enclosures over the true range,
+    /// on small cubes, against 200-bit reference ranges.
+    Enclosure(EnclosureArgs),
+}
+
+/// Arguments of `ibeam bench enclosure`.
+#[derive(clap::Args, Debug)]
+pub struct EnclosureArgs {
+    /// Reference ranges (written by tests/data/enclosure.py; default: this
+    /// checkout's tests/data/enclosure.txt).
+    #[arg(long)]
+    pub data: Option<PathBuf>,
+    /// Use at most this many boxes per surface.
+    #[arg(long)]
+    pub boxes: Option<usize>,
 }
 
 /// Arguments of `ibeam bench render`.
@@ -76,7 +91,31 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         What::Eval(a) => bench_eval(a),
         What::Render(a) => bench_render(a),
         What::Accuracy(a) => super::accuracy::run(a),
+        What::Enclosure(a) => bench_enclosure(a),
     }
+}
+
+/// `ibeam bench enclosure`: the table of [`ibeam::bench::enclosure`].
+fn bench_enclosure(args: &EnclosureArgs) -> Result<(), CliError> {
+    use ibeam::bench::enclosure::{DEFAULT_DATA, measure, parse, summarise, table};
+    let path = args
+        .data
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(DEFAULT_DATA));
+    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut rows = Vec::new();
+    for mut s in parse(&text).map_err(|e| format!("{}: {e}", path.display()))? {
+        s.boxes.truncate(args.boxes.unwrap_or(usize::MAX));
+        let n = s.boxes.len();
+        let summary = summarise(&measure(&s)?);
+        rows.push((format!("{} ({n} boxes)", s.name), summary));
+    }
+    let missed: usize = rows.iter().map(|(_, s)| s.missed).sum();
+    super::emit(&table(&rows))?;
+    if missed > 0 {
+        return Err(format!("{missed} enclosures miss their reference range").into());
+    }
+    Ok(())
 }
 
 fn default_eval_files() -> Vec<PathBuf> {

@@ -1,6 +1,7 @@
 //! `ibeam eval`: evaluate each object at a point or over a box.
 
 use super::{CliError, EvalKind, build_evaluators, emit, parse_numbers};
+use ibeam::eval::affine::AffineEvaluator;
 use ibeam::interval::Interval;
 use std::fmt::Write;
 
@@ -24,6 +25,21 @@ pub struct Args {
     /// Evaluator: the JIT, or the reference interpreter.
     #[arg(long = "eval", value_enum, default_value_t = EvalKind::Jit)]
     pub eval: EvalKind,
+    /// How `--box` encloses f: interval arithmetic, or reduced affine
+    /// forms intersected with it (never wider; costs a few times an
+    /// interval evaluation; the interpreter's, or for `--eval jit` the
+    /// tape's, as native code has no affine kind).
+    #[arg(long, value_enum, default_value_t = Enclosure::Interval)]
+    pub enclosure: Enclosure,
+}
+
+/// The enclosures `ibeam eval --box` prints.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Enclosure {
+    /// Outward-rounded interval arithmetic.
+    Interval,
+    /// Reduced affine arithmetic (see `ibeam::ir::affine_rules`).
+    Affine,
 }
 
 /// Runs `ibeam eval`. Numbers print with `{:e}`, the shortest text that
@@ -60,7 +76,10 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                 Interval::new(v[2], v[3]),
                 Interval::new(v[4], v[5]),
             ];
-            let r = eval.interval(bx);
+            let r = match args.enclosure {
+                Enclosure::Interval => eval.interval(bx),
+                Enclosure::Affine => affine(object, args.eval, bx),
+            };
             if r.is_empty() {
                 let _ = writeln!(
                     out,
@@ -73,4 +92,14 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         }
     }
     emit(&out)
+}
+
+/// The affine enclosure of `object`'s simplified function over `b`, by
+/// the interpreter or a tape (see [`Args::enclosure`]).
+fn affine(object: &ibeam::scene::Object, kind: EvalKind, b: [Interval; 3]) -> Interval {
+    let f = ibeam::ir::passes::simplify(&object.function);
+    match kind {
+        EvalKind::Interp => ibeam::eval::interp::Interpreter::new(f).affine(b),
+        EvalKind::Jit => ibeam::eval::tape::Tape::new(&f).affine(b),
+    }
 }

@@ -4,6 +4,7 @@
 //! ([`regional`]), tapes and the evaluator that runs one ([`tape`],
 //! [`taped`]), and building a scene's evaluators ([`build`]).
 
+pub mod affine;
 pub mod build;
 pub mod interp;
 pub mod jit;

@@ -530,6 +530,7 @@ impl Interval {
     }
 }
 
+pub mod affine;
 pub mod boxes;
 mod elementary;
 pub mod exp;

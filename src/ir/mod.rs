@@ -18,6 +18,7 @@
 //! keep no hidden state. [`validate::validate`] checks the contract and runs
 //! after lowering and after every pass in debug builds and in tests.
 
+pub mod affine_rules;
 pub mod passes;
 pub mod print;
 pub mod prune;

@@ -169,6 +169,84 @@ fn eval_box_contains_the_range_and_jit_equals_interp() {
     assert!(lo < 0.0 && hi > 0.0, "{text}");
 }
 
+/// The `[lo, hi]` of `ibeam eval --box`'s output.
+fn printed_interval(text: &str) -> (f64, f64) {
+    let inner = text
+        .split_once('[')
+        .and_then(|(_, r)| r.split_once(']'))
+        .expect("[lo, hi]")
+        .0;
+    let (lo, hi) = inner.split_once(", ").unwrap();
+    (lo.parse().unwrap(), hi.parse().unwrap())
+}
+
+#[test]
+fn eval_box_affine_enclosure_is_inside_the_interval_one() {
+    // The Kummer quartic over a cube 0.01 wide, where intervals
+    // overestimate (issue 40).
+    let dir = std::env::temp_dir().join(format!("ibeam-affine-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("kummer.ib");
+    std::fs::write(
+        &file,
+        "object k = (x^2 + y^2 + z^2 - 1.69)^2 - 3.1068702290076335*(1 - z - sqrt(2)*x)\
+         *(1 - z + sqrt(2)*x)*(1 + z + sqrt(2)*y)*(1 + z - sqrt(2)*y);\n",
+    )
+    .unwrap();
+    let b = "0.30,0.31,-0.52,-0.51,0.7,0.71";
+    let run = |extra: &[&str]| {
+        let o = ibeam(&[&["eval", file.to_str().unwrap(), "--box", b][..], extra].concat());
+        assert!(o.status.success(), "{}", stderr(&o));
+        stdout(&o)
+    };
+    let default = run(&[]);
+    assert_eq!(default, run(&["--enclosure", "interval"]));
+    let affine = run(&["--enclosure", "affine"]);
+    assert_eq!(affine, run(&["--enclosure", "affine", "--eval", "interp"]));
+    let (il, ih) = printed_interval(&default);
+    let (al, ah) = printed_interval(&affine);
+    assert!(il <= al && ah <= ih, "{default} {affine}");
+    assert!((ah - al) * 1.2 < ih - il, "{default} {affine}");
+    // f at the box's corners (the function's own point values).
+    for c in 0..8 {
+        let p: Vec<String> = (0..3)
+            .map(|k| {
+                let s: Vec<&str> = b.split(',').collect();
+                s[2 * k + (c >> k & 1)].to_string()
+            })
+            .collect();
+        let o = ibeam(&["eval", file.to_str().unwrap(), "--at", &p.join(",")]);
+        let text = stdout(&o);
+        let v: f64 = text
+            .split_once("f = ")
+            .and_then(|(_, r)| r.split_whitespace().next())
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(al <= v && v <= ah, "f = {v} at {p:?} outside {affine}");
+    }
+    let o = ibeam(&[
+        "eval",
+        file.to_str().unwrap(),
+        "--box",
+        b,
+        "--enclosure",
+        "taylor",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "clap usage error");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn bench_enclosure_prints_every_surface() {
+    let o = ibeam(&["bench", "enclosure", "--boxes", "4"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    for name in ["kummer", "klein", "power_minus_expansion", "expansion"] {
+        assert!(text.contains(&format!("{name} (4 boxes)")), "{text}");
+    }
+}
+
 #[test]
 fn eval_reports_bad_arguments() {
     let o = ibeam(&["eval", "examples/sphere.ib", "--at", "1,2"]);
