@@ -353,3 +353,35 @@ proptest! {
         }
     }
 }
+
+/// The tracer's `--enclosure` choices draw the same surface: a Kummer
+/// quartic (where intervals overestimate) hits the same pixels with
+/// intervals, affine forms everywhere and the learning policy, and only
+/// the affine choices evaluate affine forms.
+#[test]
+fn render_enclosures_hit_the_same_pixels() {
+    use ibeam::eval::{EvalKind, build_evaluators};
+    use ibeam::render::{Enclosure, RenderOptions, render};
+    let src = "let mu2 = 1.69;\nlet lam = (3*mu2 - 1) / (3 - mu2);\nlet r2 = sqrt(2);\n\
+               object k = (x^2 + y^2 + z^2 - mu2)^2 - lam*(1 - z - r2*x)*(1 - z + r2*x)*(1 + z + r2*y)*(1 + z - r2*y);\n\
+               camera { eye = (5, 4, 6); target = (0, 0, 0); up = (0, 1, 0); fov = 35; }\n\
+               bounds = (-2.5, -2.5, -2.5) .. (2.5, 2.5, 2.5);\n";
+    let scene = ibeam::lang::load_scene_source("kummer.ib", src).expect("scene");
+    let evals = build_evaluators(&scene, EvalKind::Interp).expect("evaluators");
+    let run = |enclosure| {
+        let mut opts = RenderOptions::new(48, 48);
+        opts.threads = Some(1);
+        opts.enclosure = enclosure;
+        render(&scene, &evals, &opts).expect("render")
+    };
+    let plain = run(Enclosure::Interval);
+    let affine = run(Enclosure::Affine);
+    let auto = run(Enclosure::Auto);
+    assert!(plain.stats.pixels_hit > 500, "{}", plain.stats.pixels_hit);
+    assert_eq!(plain.stats.affine_tries, 0);
+    assert!(affine.stats.affine_tries > 0 && affine.stats.affine_wins > 0);
+    assert!(auto.stats.affine_tries > 0);
+    for other in [&affine, &auto] {
+        assert_eq!(other.hit_mask, plain.hit_mask);
+    }
+}

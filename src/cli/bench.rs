@@ -405,6 +405,7 @@ fn time_methods(
             want_buffers: true,
             progress: false,
             prune: true,
+            enclosure: ibeam::render::Enclosure::Auto,
         };
         // The first render of a scene also compiles its lazy JIT kinds;
         // render once untimed so every row is steady-state.

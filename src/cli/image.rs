@@ -6,7 +6,7 @@ use std::fmt;
 
 use super::EvalKind;
 use ibeam::render::aa::{DEFAULT_DEPTH, DEFAULT_THRESHOLD, MAX_DEPTH};
-use ibeam::render::{Aa, MAX_SIZE, Method};
+use ibeam::render::{Aa, Enclosure, MAX_SIZE, Method};
 use ibeam::scene::Scene;
 
 /// How an image is traced, as flags.
@@ -49,6 +49,35 @@ pub struct ImageArgs {
     /// and block (slower; for measuring what pruning saves).
     #[arg(long)]
     pub no_prune: bool,
+    /// Enclosures of a block's beam tests where its interval straddles 0:
+    /// `interval` (intervals and the mean-value form), `affine` (an
+    /// affine form every time: tight where a variable appears many times,
+    /// about fifty interval evaluations each) or `auto` (the affine form
+    /// where it has paid on the tile at that block size).
+    #[arg(long, value_enum, default_value_t = EnclosureArg::Auto)]
+    pub enclosure: EnclosureArg,
+}
+
+/// `--enclosure` on the command line.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum EnclosureArg {
+    /// Intervals only.
+    Interval,
+    /// An affine form wherever the interval straddles 0.
+    Affine,
+    /// The affine form where it pays.
+    Auto,
+}
+
+impl EnclosureArg {
+    /// The renderer's enclosure choice.
+    pub fn enclosure(self) -> Enclosure {
+        match self {
+            EnclosureArg::Interval => Enclosure::Interval,
+            EnclosureArg::Affine => Enclosure::Affine,
+            EnclosureArg::Auto => Enclosure::Auto,
+        }
+    }
 }
 
 impl ImageArgs {

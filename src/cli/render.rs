@@ -191,6 +191,7 @@ pub fn run_with(
         // The CLI draws its own bar (`progress::Bar`).
         progress: false,
         prune: !args.image.no_prune,
+        enclosure: args.image.enclosure.enclosure(),
     };
     let mut gathered = Gathered::new(whole, (width, height));
     // Checked before any output is truncated: a scene that cannot render

@@ -89,6 +89,21 @@ pub struct RenderOptions {
     /// Prune large functions to each tile and block (see
     /// [`crate::ir::prune`]); off only to measure what it saves.
     pub prune: bool,
+    /// Which enclosure tightens a block's interval where it straddles 0.
+    pub enclosure: Enclosure,
+}
+
+/// The enclosures a block's beam tests may read besides the natural
+/// interval (see `enclose::mean_value::sign_bound`).
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum Enclosure {
+    /// Intervals only (the natural one and the mean-value form).
+    Interval,
+    /// An affine form wherever the natural interval straddles 0.
+    Affine,
+    /// An affine form where it has paid on the tile at that block size (a
+    /// policy that learns, as the mean-value form's does).
+    Auto,
 }
 
 impl RenderOptions {
@@ -105,6 +120,7 @@ impl RenderOptions {
             want_buffers: true,
             progress: false,
             prune: true,
+            enclosure: Enclosure::Auto,
         }
     }
 }

@@ -114,6 +114,38 @@ fn auxiliary_outputs_and_stats() {
 }
 
 #[test]
+fn enclosure_flag_chooses_the_forms_counted_in_the_stats() {
+    let dir = scratch("enclosure");
+    let tries = |choice: &str| {
+        let stats = dir.join(format!("{choice}.json"));
+        let args = ["--size", "24x24", "--threads", "1", "--enclosure", choice];
+        let mut args: Vec<&str> = args.to_vec();
+        args.extend(["--stats-json", stats.to_str().unwrap()]);
+        let o = render(&example("steiner.ib"), &dir.join("e.png"), &args);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        let find = |v: &serde_json::Value| -> Option<u64> {
+            v.as_object()?
+                .values()
+                .find_map(|g| g.get("affine_tries").and_then(serde_json::Value::as_u64))
+                .or_else(|| v.get("affine_tries")?.as_u64())
+        };
+        find(&json).expect("affine_tries in the stats")
+    };
+    assert_eq!(tries("interval"), 0);
+    assert!(tries("affine") > 0);
+    let o = render(
+        &example("steiner.ib"),
+        &dir.join("e.png"),
+        &["--enclosure", "taylor"],
+    );
+    assert_ne!(o.status.code(), Some(0));
+    assert!(stderr(&o).contains("taylor"), "{}", stderr(&o));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn syntax_error_points_at_file_line_and_column() {
     let dir = scratch("syntax");
     let scene = dir.join("bad.ib");

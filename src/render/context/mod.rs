@@ -9,9 +9,11 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use crate::eval::regional::Regional;
+use crate::eval::tape::Tape;
 use crate::eval::{Evaluator, Grad, IntervalGrad};
 use crate::interval::Interval;
 use crate::interval::boxes::IBox;
+use crate::render::Enclosure;
 use crate::render::context::stats::RenderStats;
 use crate::render::view::camera::{CornerRays, RayCamera};
 use crate::scene::{Bounds, Light, Scene};
@@ -48,6 +50,12 @@ pub(crate) struct Context<'a> {
     pub regions: &'a [Option<Arc<Regional>>],
     /// Each object's linear colour.
     pub colors: Vec<[f64; 3]>,
+    /// Which enclosure tightens a block's interval (see
+    /// `enclose::mean_value::sign_bound`).
+    pub enclosure: Enclosure,
+    /// Each object's whole-function tape for the affine form (empty:
+    /// intervals only; see `enclose::affine`).
+    pub affine_tapes: Arc<[Option<Arc<Tape>>]>,
     /// The scene's lights.
     pub lights: &'a [Light],
     /// The scene's bounds, outside which there is no surface.
@@ -90,6 +98,8 @@ impl<'a> Context<'a> {
             cam,
             evals,
             regions: &[],
+            enclosure: Enclosure::Interval,
+            affine_tapes: Arc::new([]),
             colors: scene.objects.iter().map(|o| o.color).collect(),
             lights: &scene.lights,
             bounds: b,
@@ -108,6 +118,7 @@ impl<'a> Context<'a> {
             cam,
             colors: self.colors.clone(),
             live_ops: self.live_ops.clone(),
+            affine_tapes: Arc::clone(&self.affine_tapes),
             ..*self
         }
     }
@@ -123,6 +134,7 @@ impl<'a> Context<'a> {
             regions: &set.regions,
             colors: self.colors.clone(),
             live_ops: set.live_ops.clone(),
+            affine_tapes: Arc::clone(&self.affine_tapes),
             ..*self
         }
     }
@@ -299,6 +311,8 @@ impl<'a> Context<'a> {
             cam: RayCamera::new(&crate::scene::Camera::default(), size, size).unwrap(),
             evals,
             regions: &[],
+            enclosure: Enclosure::Interval,
+            affine_tapes: Arc::new([]),
             colors: vec![[1.0; 3]; evals.len()],
             lights,
             bounds: Bounds::default(),
@@ -320,6 +334,8 @@ impl Context<'static> {
             cam: RayCamera::new(camera, size, size).unwrap(),
             evals: &[],
             regions: &[],
+            enclosure: Enclosure::Interval,
+            affine_tapes: Arc::new([]),
             colors: vec![],
             lights: &[],
             bounds: Bounds {

@@ -125,6 +125,10 @@ counters! {
         mean_value_tries: u64 => sum,
         /// Mean-value tightenings that proved a sign the natural form did not.
         mean_value_wins: u64 => sum,
+        /// Affine enclosures of a block tried (see `--enclosure`).
+        affine_tries: u64 => sum,
+        /// Affine enclosures that proved a sign the natural form did not.
+        affine_wins: u64 => sum,
         /// Live ops of the functions that were pruned to a tile, summed over
         /// tiles (see `crate::ir::prune`).
         pruned_ops_before: u64 => sum,

@@ -5,8 +5,10 @@
 use crate::eval::Evaluator;
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, point_box};
+use crate::render::Enclosure;
 use crate::render::context::Context;
 use crate::render::context::stats::RenderStats;
+use crate::render::enclose::affine;
 use crate::render::enclose::proof::{self, SignBound};
 
 /// Block-size classes (log2 of the side) the mean-value policy tells apart.
@@ -17,7 +19,15 @@ const MV_MIN_TRIES: u64 = 16;
 /// many wins.
 const MV_WIN_RATIO: u64 = 32;
 
-/// Whether the mean-value form still pays in one tile, per block size.
+/// Tries at one block size before the affine form is judged: few, as
+/// each costs about fifty interval evaluations.
+const AFFINE_MIN_TRIES: u64 = 4;
+/// The affine form stays in use at a block size while at least one try in
+/// this many wins (where it does not, the mean-value form and bisection
+/// were cheaper on every example: `docs/performance.md`).
+const AFFINE_WIN_RATIO: u64 = 2;
+
+/// Whether a form still pays in one tile, per block size.
 ///
 /// Where the form seldom decides anything (min/max-heavy functions, whose
 /// gradients are discontinuous), it only costs gradient evaluations:
@@ -26,24 +36,39 @@ const MV_WIN_RATIO: u64 = 32;
 /// using it at that size. The record is per tile, so the choice does not
 /// depend on the thread count.
 #[derive(Clone, Debug, Default)]
-pub(crate) struct MeanValuePolicy {
+pub(crate) struct FormPolicy {
     /// (tries, wins) per block-size class.
     levels: [(u64, u64); MV_LEVELS],
 }
 
-impl MeanValuePolicy {
+impl FormPolicy {
     /// A policy that never tries the form, as if it had lost every try at
     /// every block size.
-    pub(crate) fn never() -> MeanValuePolicy {
-        MeanValuePolicy {
+    pub(crate) fn never() -> FormPolicy {
+        FormPolicy {
             levels: [(MV_MIN_TRIES, 0); MV_LEVELS],
         }
     }
 
-    /// Whether the form is still worth trying on blocks of class `level`.
+    /// Whether the mean-value form is still worth trying on blocks of
+    /// class `level`.
     pub(crate) fn pays(&self, level: usize) -> bool {
+        self.pays_at(level, MV_MIN_TRIES, MV_WIN_RATIO)
+    }
+
+    /// Whether the affine form is still worth trying on blocks of class
+    /// `level`: a try costs about fifty interval evaluations, so it must
+    /// win one try in [`AFFINE_WIN_RATIO`], judged after
+    /// [`AFFINE_MIN_TRIES`].
+    pub(crate) fn pays_affine(&self, level: usize) -> bool {
+        self.pays_at(level, AFFINE_MIN_TRIES, AFFINE_WIN_RATIO)
+    }
+
+    // Whether fewer than `min_tries` tries were made at `level`, or at
+    // least one in `ratio` won.
+    fn pays_at(&self, level: usize, min_tries: u64, ratio: u64) -> bool {
         let (tries, wins) = self.levels[level.min(MV_LEVELS - 1)];
-        !(tries >= MV_MIN_TRIES && wins * MV_WIN_RATIO < tries)
+        !(tries >= min_tries && wins * ratio < tries)
     }
 
     /// Records one try at class `level`.
@@ -58,8 +83,10 @@ impl MeanValuePolicy {
 pub(crate) struct MeanValueUse<'s> {
     /// The tile's counters.
     pub stats: &'s mut RenderStats,
-    /// The tile's record of where the form pays.
-    pub policy: &'s mut MeanValuePolicy,
+    /// The tile's record of where the mean-value form pays.
+    pub policy: &'s mut FormPolicy,
+    /// The tile's record of where the affine form pays.
+    pub affine: &'s mut FormPolicy,
 }
 
 /// The signs of object `k`'s F over `b` (None: F undefined on all of it),
@@ -68,7 +95,7 @@ pub(crate) struct MeanValueUse<'s> {
 /// wherever the evaluator's gradient enclosure covers the (generalised)
 /// gradient of f over the box; it is used only when every gradient bound
 /// is finite, which rules out the poles and domain edges where it would
-/// not. `level` is the block's size class for the [`MeanValuePolicy`].
+/// not. `level` is the block's size class for the [`FormPolicy`].
 /// Signs only: the natural enclosure may come from another region's tape
 /// than the form (see [`SignBound`]).
 pub(crate) fn sign_bound(
@@ -87,28 +114,50 @@ pub(crate) fn sign_bound(
         return Some(natural);
     }
     // Flat scenes (2D models seen along their missing axis) skip the
-    // form outright: their functions are min/max trees of thousands of
-    // ops, where it measured 7 wins in 13,833 tries on prospero at 512²
-    // while compiling and running the interval-gradient evaluator
-    // doubled the render time.
-    if ctx.flat || !tile.policy.pays(level) {
+    // forms outright: their functions are min/max trees of thousands of
+    // ops, where the mean-value form measured 7 wins in 13,833 tries on
+    // prospero at 512² while compiling and running the interval-gradient
+    // evaluator doubled the render time.
+    if ctx.flat {
         return Some(natural);
     }
     if !b.iter().all(|c| c.lo.is_finite() && c.hi.is_finite()) {
         return Some(natural);
     }
-    let Some(mv) = mean_value_form(ctx.answering(k, &b), b, tile.stats) else {
-        return Some(natural);
+    let mut bound = natural;
+    if tile.policy.pays(level)
+        && let Some(mv) = mean_value_form(ctx.answering(k, &b), b, tile.stats)
+    {
+        // `f` may come from another region's tape than `mv` (one that
+        // keeps signs only); the meet still proves a sign only where one
+        // of the two does, and every tape of the tree has the same signs.
+        bound = natural.meet(SignBound::of(mv));
+        let win = bound.positive() || bound.negative();
+        tile.stats.mean_value_tries += 1;
+        tile.stats.mean_value_wins += u64::from(win);
+        tile.policy.record(level, win);
+        if win {
+            return Some(bound);
+        }
+    }
+    // The affine form where the mean-value form left the block undecided
+    // and the scene asks for it: where a variable appears many times it
+    // decides blocks the cheaper form leaves, at about fifty interval
+    // evaluations a try.
+    let affine = match ctx.enclosure {
+        Enclosure::Interval => false,
+        Enclosure::Affine => true,
+        Enclosure::Auto => tile.affine.pays_affine(level),
     };
-    // `f` may come from another region's tape than `mv` (one that keeps
-    // signs only); the meet still proves a sign only where one of the two
-    // does, and every tape of the tree has the same signs.
-    let tight = natural.meet(SignBound::of(mv));
-    let win = tight.positive() || tight.negative();
-    tile.stats.mean_value_tries += 1;
-    tile.stats.mean_value_wins += u64::from(win);
-    tile.policy.record(level, win);
-    Some(tight)
+    if affine && let Some(a) = affine::affine_signs(ctx, k, b, tile.stats) {
+        // Signs only, as above.
+        let tight = bound.meet(a);
+        let win = tight.positive() || tight.negative();
+        tile.stats.affine_wins += u64::from(win);
+        tile.affine.record(level, win);
+        return Some(tight);
+    }
+    Some(bound)
 }
 
 /// The mean-value form of `e` over the finite box `b`, with the centre's

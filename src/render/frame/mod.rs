@@ -106,7 +106,7 @@ impl<'a> Frame<'a> {
         let (w, h) = (opts.width, opts.height);
         let s = aa.grid_factor();
         let cam = RayCamera::new(&scene.camera, w * s, h * s).map_err(RenderError::Camera)?;
-        let tr = Scope::new(scene, evaluators, cam, opts.prune);
+        let tr = Scope::new(scene, evaluators, cam, opts.prune).with_enclosure(opts.enclosure);
         // IAA traces each split pixel's sub-samples on the 2^level× image of
         // its level (`aa::Sampling::level`, where grid:2^level puts them),
         // with the depth tolerance of the finest level's, 2^depth×,

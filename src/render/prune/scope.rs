@@ -10,9 +10,10 @@ use crate::eval::regional::{Answer, Parent, Regional};
 use crate::eval::tape::{Tape, Workspace};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_within};
+use crate::render::Enclosure;
 use crate::render::context::stats::RenderStats;
 use crate::render::context::{Context, EvalSet, PRUNE_MIN_OPS};
-use crate::render::enclose::mean_value::{self, MeanValuePolicy, MeanValueUse};
+use crate::render::enclose::mean_value::{self, FormPolicy, MeanValueUse};
 use crate::render::enclose::proof::SignBound;
 use crate::render::prune::cells::CellTapes;
 use crate::render::prune::groups::TileGroups;
@@ -102,7 +103,9 @@ pub(crate) struct TileState {
     /// The tile's counters, merged into the render's at the end.
     pub stats: RenderStats,
     /// The tile's record of the mean-value form (policy, not a counter).
-    pub mean_value: MeanValuePolicy,
+    pub mean_value: FormPolicy,
+    /// The tile's record of the affine form.
+    pub affine: FormPolicy,
     /// What the pruner keeps from one pruning to the next.
     pub prune: PruneScratch,
 }
@@ -149,6 +152,14 @@ impl<'a> Scope<'a> {
                 slice_ends: Arc::new([]),
             },
         }
+    }
+
+    /// The same scope with `choice` of enclosures, and the whole-function
+    /// tapes its affine form runs on.
+    pub(crate) fn with_enclosure(mut self, choice: Enclosure) -> Scope<'a> {
+        self.ctx.affine_tapes = crate::render::enclose::affine::whole_tapes(&self.ctx, choice);
+        self.ctx.enclosure = choice;
+        self
     }
 
     /// The same scope through another camera (the same scene at another
@@ -310,6 +321,7 @@ impl<'a> Scope<'a> {
         let tile = MeanValueUse {
             stats: &mut st.stats,
             policy: &mut st.mean_value,
+            affine: &mut st.affine,
         };
         mean_value::sign_bound(&self.ctx, k, b, level, tile)
     }

@@ -8,7 +8,7 @@ use image::Rgb;
 use crate::interval::Interval;
 use crate::render::context::EvalSet;
 use crate::render::context::stats::RenderStats;
-use crate::render::enclose::mean_value::MeanValuePolicy;
+use crate::render::enclose::mean_value::FormPolicy;
 use crate::render::light::shade::{self, TileSurfs};
 use crate::render::light::shadow;
 use crate::render::prune::scope::Scope;
@@ -51,7 +51,7 @@ pub(crate) struct TileSpec<'m> {
     /// out of the tile's beams.
     pub brackets: Option<&'m [Option<RootBracket>]>,
     /// Whether blocks may try the mean-value form (see
-    /// [`MeanValuePolicy`]). The policy learns per tile, from 16 tries at a
+    /// [`FormPolicy`]). The policy learns per tile, from 16 tries at a
     /// block size; IAA's fine tiles (a few split pixels' sub-samples) end
     /// before it has learnt anything, so they would pay for the form on
     /// every block. Without it they ran faster on every scene measured
@@ -127,7 +127,8 @@ pub(crate) fn render_tile(
 ) -> TileOut {
     let mut st = TileState::default();
     if !spec.mean_value {
-        st.mean_value = MeanValuePolicy::never();
+        st.mean_value = FormPolicy::never();
+        st.affine = FormPolicy::never();
     }
     let t_trace = Instant::now();
     if proven_empty(tr, opts, &spec, &mut st) {

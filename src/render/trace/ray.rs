@@ -34,14 +34,15 @@
 use super::refine::{refine, sign_change};
 use super::sweep::{Piece, Search, SweepState, Visit, sweep};
 use crate::interval::Interval;
-use crate::interval::boxes::ray_box;
-use crate::render::Hit;
+use crate::interval::boxes::{IBox, ray_box};
 use crate::render::context::stats::RenderStats;
+use crate::render::enclose::affine;
 use crate::render::enclose::centred::{Centred, Newton, centred, newton};
 use crate::render::enclose::proof;
 use crate::render::prune::scope::Scope;
 use crate::render::prune::scope::TileState;
 use crate::render::view::camera::PixelRay;
+use crate::render::{Enclosure, Hit};
 
 // Caps that keep a pathological function from stalling a render; reaching
 // one counts as a hit at the current piece (never a silent miss).
@@ -181,6 +182,9 @@ impl Search for RaySearch<'_, '_> {
         {
             return Visit::Specialise(set);
         }
+        if !affine_rejects(tr, bx, &mut self.cand, self.st) {
+            return Visit::Drop;
+        }
         self.forms.clear();
         for &k in &self.cand {
             let c = centred(&tr.ctx, ray, k as usize, bx, (a, b), &mut self.st.stats);
@@ -224,6 +228,34 @@ impl Search for RaySearch<'_, '_> {
             Newton::Gap(front, back) => Visit::Parts(front, back),
         }
     }
+}
+
+// Drops from `cand` the objects whose affine form proves them positive
+// over `bx`, where the scene's enclosure choice asks for the form (its
+// policy learns on a ray's pieces as on single-pixel blocks); whether any
+// is left. Where a variable appears many times (an expanded polynomial),
+// the natural interval of a piece stays wide however narrow the piece,
+// and a ray bisected thousands of pieces the form rejects at once.
+fn affine_rejects(tr: &Scope<'_>, bx: IBox, cand: &mut Vec<u32>, st: &mut TileState) -> bool {
+    let try_it = match tr.ctx.enclosure {
+        Enclosure::Interval => false,
+        Enclosure::Affine => true,
+        Enclosure::Auto => st.affine.pays_affine(0),
+    };
+    if try_it {
+        cand.retain(
+            |&k| match affine::affine_signs(&tr.ctx, k as usize, bx, &mut st.stats) {
+                Some(s) => {
+                    let free = s.positive();
+                    st.stats.affine_wins += u64::from(free);
+                    st.affine.record(0, free);
+                    !free
+                }
+                None => true,
+            },
+        );
+    }
+    !cand.is_empty()
 }
 
 // A narrow piece with 0 ∈ F: refine a sign change if the ends show one,
