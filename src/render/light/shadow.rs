@@ -43,6 +43,7 @@
 
 use glam::DVec3;
 
+use super::reach;
 use super::shade::HitSurface;
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_hull, box_meet, point_box};
@@ -241,7 +242,14 @@ fn sweep_segments(
     } else {
         0
     };
-    let pieces = crate::render::prune::scope::equal_pieces(0.0, 1.0, 1 << levels);
+    // Pieces past the last point any segment has in the bounds would each
+    // be dropped by the sweep's box test: they are not visited at all (a
+    // cut face lit from outside the bounds then costs no sweep).
+    let until = reach::inside_until(&q, &delta, &seg.bounds);
+    let pieces = reach::pieces_within(1 << levels, until);
+    if pieces.is_empty() {
+        return (true, None);
+    }
     let mut search = FreeSearch {
         seg: &seg,
         sw: &mut sw,
