@@ -118,7 +118,8 @@ mod tests {
 
     // A cut face on the top of the bounds lit from above: only its start
     // can be inside; a start above the bounds has none inside; a segment
-    // across the bounds stays in them until it reaches the far face.
+    // across the bounds stays in them until it reaches the first face it
+    // meets (here z = 1, at s = 1 / 0.6).
     #[test]
     fn cut_faces_and_crossings() {
         let bounds: IBox = [Interval::new(-1.0, 1.0); 3];
@@ -126,9 +127,11 @@ mod tests {
         assert_eq!(inside_until(&point_box([0.2, 1.0, 0.1]), &up, &bounds), 0.0);
         assert!(inside_until(&point_box([0.2, 1.5, 0.1]), &up, &bounds) < 0.0);
         let across = inside_until(&point_box([0.0, -1.0, 0.0]), &up, &bounds);
-        assert!((2.0..2.0 + 1e-12).contains(&across), "{across}");
+        assert!((1.0 / 0.6..1.0 / 0.6 + 1e-12).contains(&across), "{across}");
         let flat = point_box([1.0, 0.0, 0.0]);
-        assert_eq!(inside_until(&point_box([0.0; 3]), &flat, &bounds), 1.0);
+        // Rounded up, never down.
+        let along = inside_until(&point_box([0.0; 3]), &flat, &bounds);
+        assert!((1.0..1.0 + 1e-12).contains(&along), "{along}");
         let still = point_box([0.0, 0.0, 0.0]);
         assert_eq!(
             inside_until(&point_box([0.0; 3]), &still, &bounds),

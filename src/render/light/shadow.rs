@@ -318,12 +318,14 @@ impl Search for FreeSearch<'_, '_> {
         };
         if tr.pruner.enabled && tr.ctx.large && (c - a) * SEGMENT_CELL_RATIO <= at.specialised_width
         {
+            // A piece that no cell holds runs these evaluators, and its
+            // halves and the pieces after it look again: narrowing
+            // `specialised_width` here (as this did) sent every later piece
+            // of this width to the whole function (3000 spheres: 5 times
+            // as many whole-function pieces).
             if let Some(set) = CellTapes::holding(tr, &clip, self.st) {
                 return Visit::Specialise(set);
             }
-            // A piece that no cell holds looks again when pieces are
-            // narrower by the same ratio.
-            at.specialised_width = c - a;
         }
         let maybe: Vec<usize> = (0..tr.ctx.evals.len())
             .filter(|&k| !proof::holds_no_surface(tr.ctx.interval(k, clip, &mut self.st.stats)))
@@ -583,3 +585,7 @@ mod tests {
         assert!(settled_by_hint > 0);
     }
 }
+
+#[cfg(test)]
+#[path = "shadow_cells_tests.rs"]
+mod cells_tests;
