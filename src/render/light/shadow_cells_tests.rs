@@ -50,9 +50,8 @@ impl Specialise for Counting {
     }
 }
 
-// A union of `n` balls of radius 0.02, centres in [0.5, 0.9]³: a
-// cluster in one corner of the bounds, far from which no cell prunes.
-fn balls(n: usize) -> Function {
+// A union of `n` balls of radius `r`, centres in [lo, hi]³.
+fn balls(n: usize, lo: f64, hi: f64, r: f64) -> Function {
     let mut rng = Rng::new(11);
     let mut b = Builder::new();
     let (x, y, z) = (b.var(Var::X), b.var(Var::Y), b.var(Var::Z));
@@ -60,13 +59,13 @@ fn balls(n: usize) -> Function {
     for _ in 0..n {
         let mut sq = Vec::new();
         for v in [x, y, z] {
-            let c = b.constant(rng.range(0.5, 0.9));
+            let c = b.constant(rng.range(lo, hi));
             let d = b.binary(BinaryOp::Sub, v, c);
             sq.push(b.powi(d, 2));
         }
         let s = b.binary(BinaryOp::Add, sq[0], sq[1]);
         let s = b.binary(BinaryOp::Add, s, sq[2]);
-        let (d, r) = (b.unary(UnaryOp::Sqrt, s), b.constant(0.02));
+        let (d, r) = (b.unary(UnaryOp::Sqrt, s), b.constant(r));
         let ball = b.binary(BinaryOp::Sub, d, r);
         all = Some(all.map_or(ball, |u| b.binary(BinaryOp::Min, u, ball)));
     }
@@ -74,15 +73,9 @@ fn balls(n: usize) -> Function {
     b.finish(root)
 }
 
-// Pieces that no cell's evaluators hold (a cell keeps no tapes where the
-// balls do not prune) run the whole function, but the pieces after them
-// still look for a cell: one piece without a cell once sent every later
-// piece of its segment at that width to the whole function, most of a
-// 3000-ball union's shadow time.
-#[test]
-fn pieces_after_one_without_a_cell_still_run_cells() {
-    let function = balls(300);
-    let scene = Scene {
+// One object, the default light, bounds [-2, 2]³.
+fn balls_scene(function: Function) -> Scene {
+    Scene {
         objects: vec![Object {
             name: "balls".into(),
             function,
@@ -95,7 +88,48 @@ fn pieces_after_one_without_a_cell_still_run_cells() {
             max: [2.0; 3],
         },
         render: RenderSettings::default(),
+    }
+}
+
+// A cell is built the same whichever scope asks for it first: the whole
+// functions' (a top-level sweep's) or a cell's own (a nested sweep's, the
+// next piece leaving that cell). Asked from a cell's scope first, cells
+// were measured against that cell's few hundred ops, found no smaller,
+// and left to the whole functions for the rest of the tile.
+#[test]
+fn cells_do_not_depend_on_the_scope_asking_first() {
+    let scene = balls_scene(balls(400, -0.9, 0.9, 0.04));
+    let evals = build_evaluators(&scene, EvalKind::Interp).expect("evaluators");
+    let cam = RayCamera::new(&scene.camera, 16, 16).expect("camera");
+    let tr = Scope::new(&scene, &evals, cam, true);
+    let cell_box =
+        |c: [f64; 3]| -> IBox { std::array::from_fn(|i| Interval::new(c[i], c[i] + 0.05)) };
+    let (near, far) = (cell_box([-0.6, -0.6, -0.6]), cell_box([0.6, 0.5, 0.6]));
+    let ops = |set: &Option<crate::render::context::EvalSet>| {
+        set.as_ref().map(|s| s.live_ops.iter().sum::<usize>())
     };
+    // Asked from the top: the far box's cell prunes.
+    let mut fresh = TileState::default();
+    let from_top = CellTapes::holding(&tr, &far, &mut fresh);
+    assert!(ops(&from_top).is_some_and(|n| 2 * n <= tr.ctx.live_ops[0]));
+    // Asked first from the near box's cell.
+    let mut st = TileState::default();
+    let near_set = CellTapes::holding(&tr, &near, &mut st).expect("the near box's cell prunes");
+    let nested = tr.with_evals(&near_set);
+    let from_cell = CellTapes::holding(&nested, &far, &mut st);
+    assert_eq!(ops(&from_cell), ops(&from_top));
+}
+
+// Pieces that no cell's evaluators hold (a cell keeps no tapes where the
+// balls do not prune) run the whole function, but the pieces after them
+// still look for a cell: one piece without a cell once sent every later
+// piece of its segment at that width to the whole function, most of a
+// 3000-ball union's shadow time.
+#[test]
+fn pieces_after_one_without_a_cell_still_run_cells() {
+    // A cluster in one corner of the bounds, far from which no cell prunes.
+    let scene = balls_scene(balls(300, 0.5, 0.9, 0.02));
+    let whole = build_evaluators(&scene, EvalKind::Interp).expect("evaluators");
     let whole = build_evaluators(&scene, EvalKind::Interp).expect("evaluators");
     let counting = Arc::new(Counting {
         inner: whole[0].clone(),
