@@ -130,7 +130,6 @@ fn pieces_after_one_without_a_cell_still_run_cells() {
     // A cluster in one corner of the bounds, far from which no cell prunes.
     let scene = balls_scene(balls(300, 0.5, 0.9, 0.02));
     let whole = build_evaluators(&scene, EvalKind::Interp).expect("evaluators");
-    let whole = build_evaluators(&scene, EvalKind::Interp).expect("evaluators");
     let counting = Arc::new(Counting {
         inner: whole[0].clone(),
         intervals: AtomicUsize::new(0),
