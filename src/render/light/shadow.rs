@@ -43,6 +43,7 @@
 
 use glam::DVec3;
 
+use super::reach;
 use super::shade::HitSurface;
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_hull, box_meet, point_box};
@@ -241,7 +242,14 @@ fn sweep_segments(
     } else {
         0
     };
-    let pieces = crate::render::prune::scope::equal_pieces(0.0, 1.0, 1 << levels);
+    // Pieces past the last point any segment has in the bounds would each
+    // be dropped by the sweep's box test: they are not visited at all (a
+    // cut face lit from outside the bounds then costs no sweep).
+    let until = reach::inside_until(&q, &delta, &seg.bounds);
+    let pieces = reach::pieces_within(1 << levels, until);
+    if pieces.is_empty() {
+        return (true, None);
+    }
     let mut search = FreeSearch {
         seg: &seg,
         sw: &mut sw,
@@ -315,12 +323,14 @@ impl Search for FreeSearch<'_, '_> {
         };
         if tr.pruner.enabled && tr.ctx.large && (c - a) * SEGMENT_CELL_RATIO <= at.specialised_width
         {
+            // A piece that no cell holds runs these evaluators, and its
+            // halves and the pieces after it look again: narrowing
+            // `specialised_width` here (as this did) sent every later piece
+            // of this width to the whole function (3000 spheres: 5 times
+            // as many whole-function pieces).
             if let Some(set) = CellTapes::holding(tr, &clip, self.st) {
                 return Visit::Specialise(set);
             }
-            // A piece that no cell holds looks again when pieces are
-            // narrower by the same ratio.
-            at.specialised_width = c - a;
         }
         self.maybe.clear();
         for k in 0..tr.ctx.evals.len() {
@@ -583,3 +593,7 @@ mod tests {
         assert!(settled_by_hint > 0);
     }
 }
+
+#[cfg(test)]
+#[path = "shadow_cells_tests.rs"]
+mod cells_tests;

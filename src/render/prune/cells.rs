@@ -112,7 +112,7 @@ impl CellTapes {
         // tile's budget.
         let before: usize = match &parent {
             Some(set) => set.live_ops.iter().sum(),
-            None => tr.ctx.live_ops.iter().sum(),
+            None => whole_ops(tr),
         };
         let own = from.pruned_to(cell_region(tr, (level, at)), st);
         match own.map(|own| (own.live_ops.iter().sum::<usize>(), own)) {
@@ -123,6 +123,21 @@ impl CellTapes {
             _ => parent,
         }
     }
+}
+
+// The ops of the whole functions, which a cell without a parent is
+// measured against. `tr` may be a cell's own scope (a nested sweep looking
+// up the cell of a narrower piece): measured against its few hundred ops,
+// every cell it built first, pruned from the whole functions, looked no
+// smaller than its source and was left to the whole functions for the
+// rest of the tile (3000 spheres: most shadow pieces that ran the whole
+// function).
+fn whole_ops(tr: &Scope<'_>) -> usize {
+    let tapes = tr.pruner.tapes.iter();
+    tapes
+        .zip(&tr.ctx.live_ops)
+        .map(|(t, &n)| t.as_ref().map_or(n, |t| t.function().live_count()))
+        .sum()
 }
 
 /// The width of the finest cells (along their narrowest axis).
