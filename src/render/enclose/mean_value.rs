@@ -21,7 +21,7 @@ const MV_WIN_RATIO: u64 = 32;
 
 /// Tries at one block size before the affine form is judged: few, as
 /// each costs about fifty interval evaluations.
-const AFFINE_MIN_TRIES: u64 = 4;
+const AFFINE_MIN_TRIES: u64 = 2;
 /// The affine form stays in use at a block size while at least one try in
 /// this many wins (where it does not, the mean-value form and bisection
 /// were cheaper on every example: `docs/performance.md`).
