@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use crate::eval::affine::AffineEvaluator;
 use crate::eval::tape::Tape;
-use crate::interval::boxes::IBox;
+use crate::interval::boxes::{IBox, box_within};
 use crate::render::Enclosure;
 use crate::render::context::Context;
 use crate::render::context::stats::RenderStats;
@@ -36,18 +36,20 @@ pub(crate) fn whole_tapes(ctx: &Context<'_>, choice: Enclosure) -> Arc<[Option<A
 }
 
 /// The signs object `k`'s affine form proves over `b`, on the tape of the
-/// region its evaluator answers with (a sign-keeping tape proves signs
-/// alone, which is all this returns) or on its whole tape; `None` where it
-/// has neither, or the tape is too long to pay.
+/// smallest region of its evaluator's tree that holds `b` (a sign-keeping
+/// tape proves signs alone, which is all this returns) or on its whole
+/// tape; `None` where it has neither, or the tape is too long to pay.
 pub(crate) fn affine_signs(
     ctx: &Context<'_>,
     k: usize,
     b: IBox,
     stats: &mut RenderStats,
 ) -> Option<SignBound> {
+    // A region's tape is exact on its region only (and keeps its signs
+    // there): a box reaching out of it takes the whole function's.
     let tape: &Tape = match ctx.region_of(k) {
-        Some(r) => r.pruned_tape(),
-        None => ctx.affine_tapes.get(k)?.as_deref()?,
+        Some(r) if box_within(&b, &r.region()) => r.smallest_holding(&b).pruned_tape(),
+        _ => ctx.affine_tapes.get(k)?.as_deref()?,
     };
     if tape.len() > AFFINE_MAX_OPS {
         return None;
