@@ -1,45 +1,10 @@
-//! Guaranteed shadows.
-//!
-//! A point is lit by a shadow-casting light only if the segment from it to
-//! the light is proven free of surface. The segment starts at `q`, the
-//! front end of the hit's root bracket: a point of its ray within the
-//! refinement tolerance of the surface where every object was evaluated
-//! positive (see `shade::surface` for the exceptions: cut faces start on
-//! the face, tangential contacts and singular hits half a pixel out). The
-//! segment (for a directional light: up to twice the bounds diagonal,
-//! then clipped to the bounds, outside which there is no surface) is
-//! bisected front to back; a piece is free when every object's interval
-//! over it (clipped to the bounds) holds no surface, or when every object
-//! that may vanish there is proven increasing along the segment (a finite,
-//! positive derivative bound) from a start where it is proven positive:
-//! at q by an interval evaluation of q; further on, by the piece before
-//! having been proven increasing, or by an interval evaluation of the
-//! piece's start (a rejected piece proves nothing about what follows it:
-//! f may be undefined at its end, see `crate::render::enclose::proof`). A piece shorter
-//! than the resolution (a depth tolerance, about a quarter pixel, and 16
-//! times less next to the start: `Segments::resolution`) that
-//! is not free, or an exhausted budget, means shadow.
-//!
-//! In a scene large enough to prune, a piece runs the evaluators of the
-//! smallest cell of a loose octree over the bounds that holds it (see
-//! `crate::render::prune::cells`), looked up again as pieces halve: a segment through a
-//! union of many objects meets only the few near each piece, where every
-//! piece used to run the whole function (and, for a function too long for
-//! native derivatives, its whole tape for the monotonicity test).
-//!
-//! For an included block, one shadow beam first tests all its hit points
-//! at once: the box Q of their q points replaces the single point, and the
-//! same test over `Q + s·(L − Q)` proves the whole block lit (counted in
-//! `shadow_rays_saved`); only if it fails does each pixel test its own
-//! segment. Lights with `shadows: false` run no shadow code.
-//!
-//! A point of a segment inside a solid settles it (shadow) wherever it
-//! lies, and the sweep tests one in each piece it cannot reject. A pixel's
-//! own segment first tests the point at the fraction of its segment where
-//! the tile's last shadowed segment for that light met a solid
-//! ([`point_segment_free`]): neighbours in shadow mostly meet the same
-//! occluder there, and one point evaluation replaces the sweep up to it
-//! (CSG scene at 512²: 226 → 177 ms). The answer is the sweep's own.
+//! Guaranteed shadows: a point is lit by a shadow-casting light only where
+//! its segment towards the light is proven free of surface (`FreeSearch`
+//! on the sweep driver, its pieces on cell tapes in large scenes), an
+//! included block first trying one shadow beam for all its points, and a
+//! pixel first testing the point where its neighbour's segment met a
+//! solid. `docs/tracer.md` states where a segment starts, when a piece is
+//! free and what each shortcut saves.
 
 use glam::DVec3;
 

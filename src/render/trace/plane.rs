@@ -1,44 +1,11 @@
 //! Flat scenes (2D models seen along their missing axis): a quadtree of
-//! screen rectangles, with no search along the rays.
-//!
-//! In a flat scene (see `Scope::flat`) every object's value is the same
-//! all along every ray, bit for bit: no function reads a coordinate the
-//! rays move along. A single ray ([`super::ray`]) then hits only where it
-//! starts, inside a solid (the scene's value at its clip start is below
-//! zero), or, where f is exactly zero along it, wherever its sweep finds
-//! that; anywhere else, one interval over its whole range proves it empty.
-//! This module reaches the same pixels without a sweep:
-//!
-//! - A tile is a quadtree of rectangles of pixels, tested level by level:
-//!   each level's rectangles take one interval batch per object over
-//!   their beams (the hull of their rays over the tile's T range, summed
-//!   from per-column and per-row terms: the rays are parallel).
-//! - A rectangle where every object is proven positive or undefined is
-//!   background: each of its rays' boxes lies inside its beam, and
-//!   interval arithmetic is inclusion-isotone, so the single ray's test
-//!   would prove the same.
-//! - Objects proven positive are dropped for the rectangle's quarters.
-//!   Rectangles above [`SMALL_PIXELS`] pixels hand their quarters tapes
-//!   pruned to their beam (pruning nests, as in [`super::beam`]), all the
-//!   quarters of a level in one pass over their parent's tape; smaller
-//!   ones are split on the tapes they have, down to [`DIRECT_PIXELS`]
-//!   pixels, whose pixels are settled one by one.
-//! - Pixels no rectangle rejects (those of proven-negative rectangles, and
-//!   single pixels left open) are settled together: the scene's value at
-//!   every start point in one point batch (below zero: a hit at the start,
-//!   as `ray::starts_inside` decides), then one interval batch over the
-//!   rest's own ray boxes (the test that opens `ray::trace_ray` on a flat
-//!   scene, and what a single pixel's rectangle would prove); only pixels
-//!   both leave open get a single ray. A
-//!   proven-negative interval says only that f < 0 where f is defined, so
-//!   even those pixels take their point value: the images stay identical
-//!   to `Method::Pixel`'s (`tests/flat_scenes.rs`).
-//!
-//! It replaced the beam tracer's flat path, which reached the same pixels
-//! through its blocks: per-pixel start hulls and T ranges at every level,
-//! beams from corner rays, and a point and an interval per pixel of 8×8
-//! leaves. Prospero at 1024², one thread: 106–113 → 81 ms of tracing, and
-//! 71 ms once flat tiles stopped building every pixel's ray (`tile_rays`).
+//! screen rectangles, with no search along the rays. Each level's
+//! rectangles take one interval batch per object over their beams;
+//! rejected ones are background, proven-positive objects are dropped (and
+//! tapes pruned) for the quarters, and the pixels left open are settled in
+//! point and interval batches, with a single ray only where both leave
+//! them open. The same pixels as `Method::Pixel` (`tests/flat_scenes.rs`);
+//! `docs/tracer.md` says why.
 
 use super::beam::{TileRays, clear_boxes, set_block};
 use super::probe::Rect;

@@ -1,35 +1,8 @@
-//! One ray: guaranteed first-root isolation, bracketed refinement, and the
-//! fixed-step point march baseline.
-//!
-//! # First-root policy
-//! The ray's range [t0, t1] is bisected front to back. A piece is dropped
-//! when for every live object the interval over the piece's box, or the
-//! centred form along the ray (F(p(m)) + (∇F·d)·([a, b] − m)), is strictly
-//! positive (or empty: f undefined there). Where one object alone may
-//! vanish on a piece, interval Newton (dF/dt = ∇F·d from `interval_grad`)
-//! shrinks the piece or drops it, and a piece on which that object is
-//! proven monotone with proven opposite signs at its ends holds exactly one
-//! root, which is refined on the point evaluator (Illinois). Where dF/dt
-//! holds 0 (a ray passing a kink or a minimum of f) and F is positive at
-//! the midpoint, the extended division cuts a gap around the midpoint
-//! that holds no root (`newton_gap`): near misses are dropped and touching
-//! contacts closed in on in a few steps, instead of bisected to the depth
-//! the tangency policy below asks for (colonnade: a fifth of its interval
-//! evaluations went to 9,728 rays grazing a plate of no thickness). A piece
-//! narrower than the depth tolerance whose ends show a sign change is
-//! refined to its root. Without a sign change, a piece on which 0 ∈ F is
-//! bisected on until it is 64 times narrower than the tolerance, and then
-//! counts as a hit: this is how tangential contacts and double roots
-//! (f = g², which never changes sign) are drawn, at the cost of surfaces
-//! within about a 64th of a tolerance of a ray being drawn as touched. The
-//! extra depth matters twice: the interval extension of an ill-conditioned
-//! form (an expanded (x−1)^10) contains 0 on tolerance-wide pieces far from
-//! any surface, which the centred form proves empty only on much narrower
-//! pieces (its excess shrinks with the square of the width); and the beam
-//! method rejects whole blocks that pass within a tolerance of a surface,
-//! which single rays must then reject too for both methods to agree. A ray whose
-//! start point has f < 0 (point evaluation) hits at t0: cut-away views of
-//! solids clipped by the bounds, and filled masks for 2D functions.
+//! One ray: guaranteed first-root isolation (`RaySearch` on the sweep
+//! driver: interval rejection, the centred form, interval Newton and its
+//! gaps, the tangency policy), bracketed refinement, and the fixed-step
+//! point march baseline. `docs/tracer.md` states the first-root policy and
+//! why each of its rules is there.
 
 use super::refine::{refine, sign_change};
 use super::sweep::{Piece, Search, SweepState, Visit, sweep};
