@@ -64,6 +64,17 @@ impl FormPolicy {
         self.pays_at(level, AFFINE_MIN_TRIES, AFFINE_WIN_RATIO)
     }
 
+    /// Whether a block or piece of class `level` tries the affine form
+    /// under the scene's `choice` (`auto`: while it pays, see
+    /// [`FormPolicy::pays_affine`]).
+    pub(crate) fn affine_wanted(&self, choice: Enclosure, level: usize) -> bool {
+        match choice {
+            Enclosure::Interval => false,
+            Enclosure::Affine => true,
+            Enclosure::Auto => self.pays_affine(level),
+        }
+    }
+
     // Whether fewer than `min_tries` tries were made at `level`, or at
     // least one in `ratio` won.
     fn pays_at(&self, level: usize, min_tries: u64, ratio: u64) -> bool {
@@ -144,12 +155,9 @@ pub(crate) fn sign_bound(
     // and the scene asks for it: where a variable appears many times it
     // decides blocks the cheaper form leaves, at about fifty interval
     // evaluations a try.
-    let affine = match ctx.enclosure {
-        Enclosure::Interval => false,
-        Enclosure::Affine => true,
-        Enclosure::Auto => tile.affine.pays_affine(level),
-    };
-    if affine && let Some(a) = affine::affine_signs(ctx, k, b, tile.stats) {
+    if tile.affine.affine_wanted(ctx.enclosure, level)
+        && let Some(a) = affine::affine_signs(ctx, k, b, tile.stats)
+    {
         // Signs only, as above.
         let tight = bound.meet(a);
         let win = tight.positive() || tight.negative();

@@ -8,6 +8,7 @@ use super::refine::{refine, sign_change};
 use super::sweep::{Piece, Search, SweepState, Visit, sweep};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, ray_box};
+use crate::render::Hit;
 use crate::render::context::stats::RenderStats;
 use crate::render::enclose::affine;
 use crate::render::enclose::centred::{Centred, Newton, centred, newton};
@@ -15,7 +16,6 @@ use crate::render::enclose::proof;
 use crate::render::prune::scope::Scope;
 use crate::render::prune::scope::TileState;
 use crate::render::view::camera::PixelRay;
-use crate::render::{Enclosure, Hit};
 
 // Caps that keep a pathological function from stalling a render; reaching
 // one counts as a hit at the current piece (never a silent miss).
@@ -210,12 +210,7 @@ impl Search for RaySearch<'_, '_> {
 // the natural interval of a piece stays wide however narrow the piece,
 // and a ray bisected thousands of pieces the form rejects at once.
 fn affine_rejects(tr: &Scope<'_>, bx: IBox, cand: &mut Vec<u32>, st: &mut TileState) -> bool {
-    let try_it = match tr.ctx.enclosure {
-        Enclosure::Interval => false,
-        Enclosure::Affine => true,
-        Enclosure::Auto => st.affine.pays_affine(0),
-    };
-    if try_it {
+    if st.affine.affine_wanted(tr.ctx.enclosure, 0) {
         cand.retain(
             |&k| match affine::affine_signs(&tr.ctx, k as usize, bx, &mut st.stats) {
                 Some(s) => {
