@@ -228,6 +228,78 @@ fn polynomials_hold_exact_values() {
     );
 }
 
+/// The form along a ray (one noise symbol for the ray parameter, as the
+/// tracer's single rays use it) holds the oracle's and the point
+/// evaluation's values at points of the ray, and the part of the piece
+/// it keeps (`may_reach_zero`) holds every point where f may be 0 or
+/// below: outside it the point values are positive. Returns how many
+/// points the part excluded.
+fn check_along_rays(f: &Function, rng: &mut Rng, what: &str) -> usize {
+    use ibeam::eval::affine::affine_along;
+    use ibeam::interval::affine::along_parameter;
+    use ibeam::interval::boxes::ray_box;
+    let tape = TapeEvaluator::of_function(f);
+    let mut vals = Vec::new();
+    let mut excluded = 0;
+    for _ in 0..8 {
+        // An origin box a little wider than rounding, so that the points
+        // computed below lie on rays from it.
+        let om = [0, 1, 2].map(|_| rng.range(-2.0, 2.0));
+        let o = om.map(|c| Interval::new(c - 1e-9, c + 1e-9));
+        let dm = [0, 1, 2].map(|_| rng.range(-1.0, 1.0));
+        let d = dm.map(Interval::point);
+        let t0 = rng.range(0.0, 3.0);
+        let t = Interval::new(t0, t0 + rng.pick(&[1e-6, 0.01, 0.1, 1.0]));
+        let v = affine_along(tape.tape(), o, d, t, ray_box(o, d, t));
+        let part = v.form.may_reach_zero().and_then(|e| along_parameter(t, e));
+        for k in 0..=16 {
+            let tk = common::sample(t, f64::from(k) / 16.0);
+            // Rays from near the origin box's corners too, well inside it.
+            let shift = [0, 1, 2].map(|_| rng.pick(&[-0.9e-9, 0.0, 0.9e-9]));
+            let p = [0, 1, 2].map(|i| (om[i] + shift[i]) + dm[i] * tk);
+            if let Some((lo, hi)) = tight_at(f, p) {
+                assert!(
+                    v.range.lo <= lo && hi <= v.range.hi,
+                    "{what} at t = {tk}: {:?} lacks [{lo:e}, {hi:e}]",
+                    v.range
+                );
+            }
+            run_point(&f.ops, p, &mut vals);
+            let fp = vals[f.root.index()];
+            if !vals.iter().all(|v| v.is_finite()) {
+                continue;
+            }
+            assert!(
+                v.range.contains(fp),
+                "{what} at t = {tk}: {:?} lacks {fp:e}",
+                v.range
+            );
+            if !part.is_some_and(|p| p.contains(tk)) {
+                excluded += 1;
+                assert!(
+                    fp > 0.0,
+                    "{what}: t = {tk} excluded by {part:?}, f = {fp:e}"
+                );
+            }
+        }
+    }
+    excluded
+}
+
+#[test]
+fn forms_along_rays_hold_values_and_clip_soundly() {
+    let mut rng = Rng::new(42);
+    let mut excluded = 0;
+    for seed in 0..300 {
+        let f = random_polynomial(&mut rng, 2 + seed % 6);
+        excluded += check_along_rays(&f, &mut rng, &format!("polynomial {seed}"));
+        let g = random_function(u64::from(seed), 8);
+        check_along_rays(&g, &mut rng, &format!("random function {seed}"));
+    }
+    // The clip must have had something to do for the test to mean much.
+    assert!(excluded > 1000, "the parts excluded only {excluded} points");
+}
+
 #[test]
 fn random_functions_hold_point_values() {
     let mut rng = Rng::new(41);

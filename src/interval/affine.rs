@@ -19,15 +19,16 @@
 //! slope, an offset and an error bound computed with outward-rounded
 //! intervals ([`Affine::linear`]).
 
-use super::{FLOOR_STEP, Interval, mx, up, up_sum};
+use super::{FLOOR_STEP, Interval, down, mx, up, up_sum};
 
 /// `c + Σ k_i·ε_i ± e` (see the module doc).
 #[derive(Copy, Clone, Debug, PartialEq)]
-pub struct Affine {
+pub struct Affine<const N: usize = 3> {
     /// The centre.
     pub c: f64,
-    /// The coefficients of the x, y and z noise symbols.
-    pub k: [f64; 3],
+    /// The coefficients of the noise symbols: x, y and z over a box, or
+    /// the ray parameter along a ray ([`Affine::along`]).
+    pub k: [f64; N],
     /// The accumulated error, `≥ 0` (+inf: unbounded).
     pub e: f64,
 }
@@ -85,26 +86,30 @@ impl ErrSum {
     /// rounds upward. NaN and +inf stay.
     #[inline]
     fn total(&self) -> f64 {
+        // One term is its own exact sum.
+        if self.terms <= 1 {
+            return self.sum;
+        }
         up(self.sum * (1.0 + f64::from(self.terms) * STEP))
     }
 }
 
-impl Affine {
+impl<const N: usize> Affine<N> {
     /// The form that encloses every value: no centre, unbounded error.
-    pub const UNBOUNDED: Affine = Affine {
+    pub const UNBOUNDED: Affine<N> = Affine {
         c: 0.0,
-        k: [0.0; 3],
+        k: [0.0; N],
         e: f64::INFINITY,
     };
 
     /// The exact constant `v` (UNBOUNDED for a value that is not finite).
-    pub fn constant(v: f64) -> Affine {
+    pub fn constant(v: f64) -> Affine<N> {
         if !v.is_finite() {
             return Affine::UNBOUNDED;
         }
         Affine {
             c: v,
-            k: [0.0; 3],
+            k: [0.0; N],
             e: 0.0,
         }
     }
@@ -113,28 +118,26 @@ impl Affine {
     /// `m + r·ε` with `m` the side's midpoint and `r` an upper bound of its
     /// distance to either end, so the form covers the side whatever the
     /// rounding. UNBOUNDED for a side that is not finite (or EMPTY).
-    pub fn var(side: Interval, axis: usize) -> Affine {
-        let m = side.mid();
-        let r = mx(up_sum(side.hi - m), up_sum(m - side.lo));
+    pub fn var(side: Interval, axis: usize) -> Affine<N> {
+        let (m, r) = centre_radius(side);
         if !(m.is_finite() && r.is_finite()) {
             return Affine::UNBOUNDED;
         }
-        let mut k = [0.0; 3];
+        let mut k = [0.0; N];
         k[axis] = r;
         Affine { c: m, k, e: 0.0 }
     }
 
     /// The interval `i` as a form of pure error: its midpoint ± an upper
     /// bound of its radius (UNBOUNDED for an unbounded or EMPTY `i`).
-    pub fn from_interval(i: Interval) -> Affine {
-        let m = i.mid();
-        let e = mx(up_sum(i.hi - m), up_sum(m - i.lo));
+    pub fn from_interval(i: Interval) -> Affine<N> {
+        let (m, e) = centre_radius(i);
         if !(m.is_finite() && e.is_finite()) {
             return Affine::UNBOUNDED;
         }
         Affine {
             c: m,
-            k: [0.0; 3],
+            k: [0.0; N],
             e,
         }
     }
@@ -145,7 +148,7 @@ impl Affine {
     }
 
     /// UNBOUNDED where a part overflowed or went NaN, else the form.
-    fn checked(self) -> Affine {
+    fn checked(self) -> Affine<N> {
         if self.is_bounded() {
             self
         } else {
@@ -154,7 +157,7 @@ impl Affine {
     }
 
     /// An upper bound of `Σ|k_i|`, the reach of the noise symbols.
-    fn reach(&self) -> f64 {
+    pub fn reach(&self) -> f64 {
         let mut r = ErrSum::default();
         for k in self.k {
             r.add(k.abs());
@@ -173,7 +176,13 @@ impl Affine {
         if !self.is_bounded() {
             return Interval::ENTIRE;
         }
-        let r = self.radius();
+        self.range_within(self.reach())
+    }
+
+    /// [`Affine::range`] of a bounded form whose [`Affine::reach`] is
+    /// `reach` (or any upper bound of it).
+    pub fn range_within(&self, reach: f64) -> Interval {
+        let r = up_sum(reach + self.e);
         let (lo, hi) = (-up_sum(r - self.c), up_sum(self.c + r));
         if lo.is_nan() || hi.is_nan() {
             return Interval::ENTIRE;
@@ -182,7 +191,7 @@ impl Affine {
     }
 
     /// `-self` (exact).
-    pub fn neg(&self) -> Affine {
+    pub fn neg(&self) -> Affine<N> {
         Affine {
             c: -self.c,
             k: self.k.map(|k| -k),
@@ -191,7 +200,7 @@ impl Affine {
     }
 
     /// `self + o`.
-    pub fn add(&self, o: &Affine) -> Affine {
+    pub fn add(&self, o: &Affine<N>) -> Affine<N> {
         let mut err = ErrSum::default();
         err.add(self.e);
         err.add(o.e);
@@ -206,13 +215,13 @@ impl Affine {
     }
 
     /// `self - o`.
-    pub fn sub(&self, o: &Affine) -> Affine {
+    pub fn sub(&self, o: &Affine<N>) -> Affine<N> {
         self.add(&o.neg())
     }
 
     /// `alpha·self + beta ± delta`, with `delta ≥ 0` an upper bound of
     /// whatever the caller's linearisation leaves out.
-    pub fn linear(&self, alpha: f64, beta: f64, delta: f64) -> Affine {
+    pub fn linear(&self, alpha: f64, beta: f64, delta: f64) -> Affine<N> {
         let mut err = ErrSum::default();
         err.add(delta);
         err.add(mul_up(alpha.abs(), self.e));
@@ -232,7 +241,7 @@ impl Affine {
     /// `[min(0, a_i b_i), max(0, a_i b_i)]` each), `Σ_{i<j} (a_i b_j +
     /// a_j b_i) ε_i ε_j`, and the products with the error terms, then
     /// centred: its midpoint joins the centre, its radius the error.
-    pub fn mul(&self, o: &Affine) -> Affine {
+    pub fn mul(&self, o: &Affine<N>) -> Affine<N> {
         let (a, b) = (self, o);
         let mut err = ErrSum::default();
         // The error terms times the other form's centre.
@@ -246,7 +255,7 @@ impl Affine {
         });
         // The quadratic rest lies in [-neg, pos]; both are upper bounds.
         let (mut neg, mut pos) = (ErrSum::default(), ErrSum::default());
-        for i in 0..3 {
+        for i in 0..N {
             let d = a.k[i] * b.k[i];
             if d > 0.0 {
                 pos.add(mul_up(a.k[i], b.k[i]));
@@ -255,10 +264,12 @@ impl Affine {
             }
         }
         let mut cross = ErrSum::default();
-        for (i, j) in [(0, 1), (0, 2), (1, 2)] {
-            let s_up = up_sum(mul_up(a.k[i], b.k[j]) + mul_up(a.k[j], b.k[i]));
-            let s_dn = up_sum(mul_up(-a.k[i], b.k[j]) + mul_up(-a.k[j], b.k[i]));
-            cross.add(mx(s_up, s_dn));
+        for i in 0..N {
+            for j in i + 1..N {
+                let s_up = up_sum(mul_up(a.k[i], b.k[j]) + mul_up(a.k[j], b.k[i]));
+                let s_dn = up_sum(mul_up(-a.k[i], b.k[j]) + mul_up(-a.k[j], b.k[i]));
+                cross.add(mx(s_up, s_dn));
+            }
         }
         cross.add(mul_up(a.reach(), b.e));
         cross.add(mul_up(b.reach(), a.e));
@@ -272,7 +283,7 @@ impl Affine {
     /// `self²`: as [`Affine::mul`] with itself, where the quadratic rest
     /// `(Σ k_i ε_i ± e)²` lies in `[0, (Σ|k_i| + e)²]` (the same error
     /// symbol on both sides: a square is never negative).
-    pub fn square(&self) -> Affine {
+    pub fn square(&self) -> Affine<N> {
         let mut err = ErrSum::default();
         err.add(mul_up(2.0 * self.c.abs(), self.e));
         let c0 = err.rounded(self.c * self.c);
@@ -283,7 +294,7 @@ impl Affine {
 
     /// `c0 + k·ε` plus a rest in `[-neg, pos]`: the rest's midpoint joins
     /// the centre and its radius (rounded up) the error.
-    fn centred(c0: f64, k: [f64; 3], mut err: ErrSum, [neg, pos]: [f64; 2]) -> Affine {
+    fn centred(c0: f64, k: [f64; N], mut err: ErrSum, [neg, pos]: [f64; 2]) -> Affine<N> {
         let m = 0.5 * (pos - neg);
         // Distances from m to either end of the rest, rounded up.
         err.add(mx(up_sum(pos - m), up_sum(m + neg)));
@@ -297,13 +308,81 @@ impl Affine {
 
     /// The form with `slack` added to its error (the rounding of the point
     /// op it encloses, see `ir::affine_rules`).
-    pub fn widened(&self, slack: f64) -> Affine {
+    pub fn widened(&self, slack: f64) -> Affine<N> {
         Affine {
             e: up_sum(self.e + slack),
             ..*self
         }
         .checked()
     }
+}
+
+impl Affine<1> {
+    /// Coordinate `o + d·t` of a ray, `t` over the range `t` and the
+    /// ray's origin and direction coordinates anywhere in the intervals
+    /// `o` and `d` (a pixel's ray is itself an enclosure), in one noise
+    /// symbol for the ray parameter: `t = m + r·ε` as in [`Affine::var`],
+    /// so the coordinate is `(o_m + d_m·m) + (d_m·r)·ε`, with `o_m`, `d_m`
+    /// the midpoints, plus an error for the rounding of those ops and for
+    /// `o` and `d` away from their midpoints (`r_o + r_d·|t|`). A ray's
+    /// coordinates stay tied to each other this way, where a box's three
+    /// symbols take them as independent. UNBOUNDED where not finite.
+    pub fn along(o: Interval, d: Interval, t: Interval) -> Affine<1> {
+        let ((om, or), (dm, dr), (m, r)) = (centre_radius(o), centre_radius(d), centre_radius(t));
+        let mut err = ErrSum::default();
+        err.add(or);
+        err.add(mul_up(dr, up_sum(m.abs() + r)));
+        let dtm = err.rounded(dm * m);
+        let c = err.rounded(om + dtm);
+        let k = err.rounded(dm * r);
+        Affine {
+            c,
+            k: [k],
+            e: err.total(),
+        }
+        .checked()
+    }
+
+    /// The part of `[-1, 1]` where the form may be 0 or below: the values
+    /// of the noise symbol outside it give `c + k·ε - e > 0`, so f is
+    /// positive there (where defined). Bounds rounded outward; `None`
+    /// where the form is positive everywhere, the whole range where it
+    /// is unbounded.
+    pub fn may_reach_zero(&self) -> Option<Interval> {
+        let whole = Interval::new(-1.0, 1.0);
+        if !self.is_bounded() {
+            return Some(whole);
+        }
+        let k = self.k[0];
+        // c + k·ε ≤ e, i.e. k·ε ≤ e - c, which is at most `hi`.
+        let hi = up_sum(self.e - self.c);
+        let part = if k > 0.0 {
+            Interval::new(-1.0, up(hi / k))
+        } else if k < 0.0 {
+            Interval::new(down(hi / k), 1.0)
+        } else if hi >= 0.0 {
+            whole
+        } else {
+            return None;
+        };
+        meet(part, whole)
+    }
+}
+
+/// The parameters `m + r·ε` for `ε` in `eps`, `m` and `r` as
+/// [`Affine::along`] takes them from the range `t`, rounded outward and
+/// kept within `t`: the part of `t` where [`Affine::may_reach_zero`]'s
+/// noise values lie.
+pub fn along_parameter(t: Interval, eps: Interval) -> Option<Interval> {
+    let (m, r) = centre_radius(t);
+    meet(Interval::point(m).add(Interval::point(r).mul(eps)), t)
+}
+
+/// An interval's midpoint `m` and an upper bound `r` of its distance to
+/// either end, so that `m + r·[-1, 1]` covers it whatever the rounding.
+fn centre_radius(i: Interval) -> (f64, f64) {
+    let m = i.mid();
+    (m, mx(up_sum(i.hi - m), up_sum(m - i.lo)))
 }
 
 /// An upper bound of `ulps` ulps of every value of magnitude at most `m`
@@ -329,7 +408,7 @@ mod tests {
 
     #[test]
     fn products_of_a_variable_enclose_its_square() {
-        let x = Affine::var(Interval::new(0.9, 1.1), 0);
+        let x = Affine::<3>::var(Interval::new(0.9, 1.1), 0);
         let s = x.square().range();
         let m = x.mul(&x).range();
         for v in [0.9f64, 1.0, 1.1] {
@@ -342,8 +421,39 @@ mod tests {
     }
 
     #[test]
+    fn a_ray_keeps_its_coordinates_tied() {
+        // Along x = 1 + t, y = 1 - t, x + y is the constant 2: one symbol
+        // cancels exactly, where a box's two symbols add their widths.
+        let t = Interval::new(0.0, 0.5);
+        let x = Affine::along(Interval::point(1.0), Interval::point(1.0), t);
+        let y = Affine::along(Interval::point(1.0), Interval::point(-1.0), t);
+        let r = x.add(&y).range();
+        assert!(r.contains(2.0) && r.width() < 1e-12, "{r:?}");
+    }
+
+    #[test]
+    fn may_reach_zero_keeps_the_part_that_can_vanish() {
+        // 1 + 2ε ± 0.5 is positive for ε > -0.25.
+        let f = Affine {
+            c: 1.0,
+            k: [2.0],
+            e: 0.5,
+        };
+        let p = f.may_reach_zero().unwrap();
+        assert!(p.lo == -1.0 && p.hi >= -0.25 && p.hi < -0.2499, "{p:?}");
+        // Mirrored, and wholly positive.
+        let g = Affine { k: [-2.0], ..f };
+        let q = g.may_reach_zero().unwrap();
+        assert!(q.hi == 1.0 && q.lo <= 0.25 && q.lo > 0.2499, "{q:?}");
+        assert_eq!(Affine { k: [0.4], ..f }.may_reach_zero(), None);
+        // On t over [2, 4] (m = 3, r = 1) the first part is [2, 2.75].
+        let t = along_parameter(Interval::new(2.0, 4.0), p).unwrap();
+        assert!(t.lo == 2.0 && t.hi >= 2.75 && t.hi < 2.7501, "{t:?}");
+    }
+
+    #[test]
     fn overflow_gives_the_unbounded_form() {
-        let x = Affine::var(Interval::new(1e300, 1.1e300), 0);
+        let x = Affine::<3>::var(Interval::new(1e300, 1.1e300), 0);
         assert_eq!(x.mul(&x), Affine::UNBOUNDED);
         assert_eq!(x.mul(&x).range(), Interval::ENTIRE);
     }

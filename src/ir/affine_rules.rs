@@ -60,9 +60,9 @@ use crate::interval::{Interval, mx, up_sum};
 /// A reduced affine form and an interval of the same values (see the
 /// module doc); EMPTY where the interval is.
 #[derive(Copy, Clone, Debug, PartialEq)]
-pub struct AffineValue {
+pub struct AffineValue<const N: usize = 3> {
     /// The affine form.
-    pub form: Affine,
+    pub form: Affine<N>,
     /// The interval, intersected with the form's range.
     pub range: Interval,
 }
@@ -72,15 +72,15 @@ pub struct AffineValue {
 /// and the rest covers the magnitude bound's own rounding.
 pub const TRANSCENDENTAL_SLACK: u32 = 4;
 
-impl AffineValue {
+impl<const N: usize> AffineValue<N> {
     /// The empty set.
-    pub const EMPTY: AffineValue = AffineValue {
+    pub const EMPTY: AffineValue<N> = AffineValue {
         form: Affine::UNBOUNDED,
         range: Interval::EMPTY,
     };
 
     /// Coordinate `axis` over the box side `side`.
-    pub fn var(side: Interval, axis: usize) -> AffineValue {
+    pub fn var(side: Interval, axis: usize) -> AffineValue<N> {
         if side.is_empty() {
             return AffineValue::EMPTY;
         }
@@ -91,7 +91,7 @@ impl AffineValue {
     }
 
     /// The constant `c` (EMPTY for NaN, as its interval).
-    pub fn constant(c: f64) -> AffineValue {
+    pub fn constant(c: f64) -> AffineValue<N> {
         let range = Interval::point(c);
         if range.is_empty() {
             return AffineValue::EMPTY;
@@ -108,38 +108,61 @@ impl AffineValue {
     }
 }
 
+impl AffineValue<1> {
+    /// Coordinate `o + d·t` of a ray over the parameter range `t`, whose
+    /// interval is `side` (see [`Affine::along`]).
+    pub fn along(o: Interval, d: Interval, t: Interval, side: Interval) -> AffineValue<1> {
+        if side.is_empty() {
+            return AffineValue::EMPTY;
+        }
+        AffineValue {
+            form: Affine::<1>::along(o, d, t),
+            range: side,
+        }
+    }
+}
+
 /// The result of an op whose interval rule gives `iv` and whose affine
 /// rule gives `form`, before the point op's rounding of `ulps` ulps:
 /// see the module doc.
-fn finish(form: Affine, iv: Interval, ulps: u32) -> AffineValue {
+fn finish<const N: usize>(form: Affine<N>, iv: Interval, ulps: u32) -> AffineValue<N> {
     if iv.is_empty() {
         return AffineValue::EMPTY;
     }
-    let form = if ulps > 0 && form.is_bounded() {
-        let by_form = up_sum(form.c.abs() + form.radius());
-        let by_iv = mx(iv.lo.abs(), iv.hi.abs());
-        form.widened(ulps_of(by_form.min(by_iv), ulps))
-    } else {
-        form
+    let plain = AffineValue {
+        form: Affine::from_interval(iv),
+        range: iv,
     };
-    match meet(iv, form.range()) {
-        Some(range) if form.is_bounded() => AffineValue { form, range },
-        Some(range) => AffineValue {
-            form: Affine::from_interval(range),
-            range,
-        },
-        None => AffineValue {
-            form: Affine::from_interval(iv),
-            range: iv,
-        },
+    if !form.is_bounded() {
+        return plain;
+    }
+    // The form's reach is summed once: this runs after every op, and
+    // the radius and the range each summed it again (a fifth of an
+    // affine evaluation's time).
+    let reach = form.reach();
+    let mut e = form.e;
+    if ulps > 0 {
+        let by_form = up_sum(form.c.abs() + up_sum(reach + e));
+        let by_iv = mx(iv.lo.abs(), iv.hi.abs());
+        e = up_sum(e + ulps_of(by_form.min(by_iv), ulps));
+        if !e.is_finite() {
+            return plain;
+        }
+    }
+    let form = Affine { e, ..form };
+    match meet(iv, form.range_within(reach)) {
+        Some(range) => AffineValue { form, range },
+        None => plain,
     }
 }
 
 /// The interval rule alone, as a form of pure error.
-const FALLBACK: (Affine, u32) = (Affine::UNBOUNDED, 0);
+fn fallback<const N: usize>() -> (Affine<N>, u32) {
+    (Affine::UNBOUNDED, 0)
+}
 
 /// Affine rule of a one-operand op.
-pub fn affine_unary(op: UnaryOp, a: &AffineValue) -> AffineValue {
+pub fn affine_unary<const N: usize>(op: UnaryOp, a: &AffineValue<N>) -> AffineValue<N> {
     let iv = interval_unary(op, a.range);
     if iv.is_empty() {
         return AffineValue::EMPTY;
@@ -154,7 +177,7 @@ pub fn affine_unary(op: UnaryOp, a: &AffineValue) -> AffineValue {
         UnaryOp::Sqrt if r.lo >= 0.0 => (chebyshev(a, &SQRT), 1),
         UnaryOp::Exp => (chebyshev(a, &EXP), t),
         UnaryOp::Ln if r.lo > 0.0 => (chebyshev(a, &LN), t),
-        UnaryOp::Asin | UnaryOp::Acos if r.lo < -1.0 || r.hi > 1.0 => FALLBACK,
+        UnaryOp::Asin | UnaryOp::Acos if r.lo < -1.0 || r.hi > 1.0 => fallback(),
         UnaryOp::Sin
         | UnaryOp::Cos
         | UnaryOp::Tan
@@ -167,7 +190,7 @@ pub fn affine_unary(op: UnaryOp, a: &AffineValue) -> AffineValue {
             mean_value(a, |i| interval_unary(op, i), |i| derivative(op, i)),
             t,
         ),
-        _ => FALLBACK,
+        _ => fallback(),
     };
     finish(form, iv, ulps)
 }
@@ -190,7 +213,11 @@ fn derivative(op: UnaryOp, i: Interval) -> Interval {
 }
 
 /// Affine rule of a two-operand op.
-pub fn affine_binary(op: BinaryOp, a: &AffineValue, b: &AffineValue) -> AffineValue {
+pub fn affine_binary<const N: usize>(
+    op: BinaryOp,
+    a: &AffineValue<N>,
+    b: &AffineValue<N>,
+) -> AffineValue<N> {
     let iv = interval_binary(op, a.range, b.range);
     if iv.is_empty() {
         return AffineValue::EMPTY;
@@ -206,13 +233,13 @@ pub fn affine_binary(op: BinaryOp, a: &AffineValue, b: &AffineValue) -> AffineVa
         BinaryOp::Min if rb.hi <= ra.lo => (b.form, 0),
         BinaryOp::Max if ra.lo >= rb.hi => (a.form, 0),
         BinaryOp::Max if rb.lo >= ra.hi => (b.form, 0),
-        _ => FALLBACK,
+        _ => fallback(),
     };
     finish(form, iv, ulps)
 }
 
 /// Affine rule of `powi(a, n)`.
-pub fn affine_powi(a: &AffineValue, n: i32) -> AffineValue {
+pub fn affine_powi<const N: usize>(a: &AffineValue<N>, n: i32) -> AffineValue<N> {
     let iv = a.range.powi(n);
     if iv.is_empty() {
         return AffineValue::EMPTY;
@@ -226,10 +253,10 @@ pub fn affine_powi(a: &AffineValue, n: i32) -> AffineValue {
         1 => (a.form, 0),
         2 => (a.form.square(), 1),
         // Its derivative's exponent n - 1 would overflow.
-        i32::MIN => FALLBACK,
+        i32::MIN => fallback(),
         _ if !odd || r.lo >= 0.0 || r.hi <= 0.0 => {
             if n < 0 && r.lo <= 0.0 && r.hi >= 0.0 {
-                FALLBACK
+                fallback()
             } else {
                 let shape = Shape {
                     f: &|i: Interval| i.powi(n),
@@ -248,15 +275,25 @@ pub fn affine_powi(a: &AffineValue, n: i32) -> AffineValue {
             ),
             ulps,
         ),
-        _ => FALLBACK,
+        _ => fallback(),
     };
     finish(form, iv, ulps)
 }
+
+/// A range at most this wide relative to its largest magnitude takes the
+/// midpoint as its tangent point in [`powi_at_slope`].
+const NARROW_POWER_RANGE: f64 = 0.125;
 
 /// Where `n·u^(n-1) = s`, roughly (any `u` is sound, this one is tight):
 /// `|u| = |s/n|^(1/(n-1))`, with the sign of `s/n` for an odd `n - 1`
 /// and of the range `r` for an even one.
 fn powi_at_slope(s: f64, n: i32, r: Interval) -> f64 {
+    // Over a range narrow beside its magnitude that point is within a
+    // few percent of the range's width of the midpoint, and the tangent
+    // there bounds as tightly to second order, without a `pow`.
+    if r.hi - r.lo <= NARROW_POWER_RANGE * mx(r.lo.abs(), r.hi.abs()) {
+        return r.mid();
+    }
     let q = s / f64::from(n);
     let m = libm::pow(q.abs(), 1.0 / f64::from(n - 1));
     let positive = if (n - 1) % 2 != 0 {
@@ -320,7 +357,7 @@ const RECIP: Shape = Shape {
 /// convex function lies above each tangent: `f(u) - f'(u)·u + (f'(u) -
 /// α)·t` over the range. A concave `f` swaps the two bounds. Any `α` and
 /// `u` give a sound bound; these give about the tightest.
-fn chebyshev(a: &AffineValue, s: &Shape) -> Affine {
+fn chebyshev<const N: usize>(a: &AffineValue<N>, s: &Shape) -> Affine<N> {
     let r = a.range;
     if !(r.lo.is_finite() && r.hi.is_finite()) {
         return Affine::UNBOUNDED;
@@ -363,11 +400,11 @@ fn chebyshev(a: &AffineValue, s: &Shape) -> Affine {
 /// midpoint `m`: `f(t) - α·t = f(m) - α·m + (f'(ξ) - α)·(t - m)` for some
 /// ξ in `I`, bounded with the derivative's interval `D` over `I`; `α` is
 /// the midpoint of `D`.
-fn mean_value(
-    a: &AffineValue,
+fn mean_value<const N: usize>(
+    a: &AffineValue<N>,
     f: impl Fn(Interval) -> Interval,
     df: impl Fn(Interval) -> Interval,
-) -> Affine {
+) -> Affine<N> {
     let r = a.range;
     if !(r.lo.is_finite() && r.hi.is_finite()) {
         return Affine::UNBOUNDED;
@@ -386,7 +423,7 @@ fn mean_value(
 
 /// `α·a + β ± δ` for `f(a) - α·a` in `g`: `β` its midpoint, `δ` an upper
 /// bound of its radius (UNBOUNDED when `g` is not a finite interval).
-fn linear_from(a: &AffineValue, alpha: f64, g: Interval) -> Affine {
+fn linear_from<const N: usize>(a: &AffineValue<N>, alpha: f64, g: Interval) -> Affine<N> {
     if !(g.lo.is_finite() && g.hi.is_finite() && g.lo <= g.hi) {
         return Affine::UNBOUNDED;
     }

@@ -104,8 +104,11 @@ pub(crate) struct TileState {
     pub stats: RenderStats,
     /// The tile's record of the mean-value form (policy, not a counter).
     pub mean_value: FormPolicy,
-    /// The tile's record of the affine form.
+    /// The tile's record of the affine form on blocks.
     pub affine: FormPolicy,
+    /// The tile's record of the affine form along single rays (a form of
+    /// its own: one noise symbol, and it clips pieces as well as rejects).
+    pub affine_along: FormPolicy,
     /// What the pruner keeps from one pruning to the next.
     pub prune: PruneScratch,
 }

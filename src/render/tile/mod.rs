@@ -129,6 +129,7 @@ pub(crate) fn render_tile(
     if !spec.mean_value {
         st.mean_value = FormPolicy::never();
         st.affine = FormPolicy::never();
+        st.affine_along = FormPolicy::never();
     }
     let t_trace = Instant::now();
     if proven_empty(tr, opts, &spec, &mut st) {

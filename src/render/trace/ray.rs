@@ -10,7 +10,7 @@ use crate::interval::Interval;
 use crate::interval::boxes::{IBox, ray_box};
 use crate::render::Hit;
 use crate::render::context::stats::RenderStats;
-use crate::render::enclose::affine;
+use crate::render::enclose::affine::{self, AlongRay};
 use crate::render::enclose::centred::{Centred, Newton, centred, newton};
 use crate::render::enclose::proof;
 use crate::render::prune::scope::Scope;
@@ -155,8 +155,13 @@ impl Search for RaySearch<'_, '_> {
         {
             return Visit::Specialise(set);
         }
-        if !affine_rejects(tr, bx, &mut self.cand, self.st) {
+        let Some((na, nb)) = affine_narrows(tr, ray, (a, b), bx, &mut self.cand, self.st) else {
             return Visit::Drop;
+        };
+        // The parts the forms exclude hold no surface: sweep what is left
+        // where that is at most half the piece (a sure step forward).
+        if nb - na <= 0.5 * (b - a) {
+            return Visit::Parts(Some((na, nb)), None);
         }
         self.forms.clear();
         for &k in &self.cand {
@@ -203,27 +208,44 @@ impl Search for RaySearch<'_, '_> {
     }
 }
 
-// Drops from `cand` the objects whose affine form proves them positive
-// over `bx`, where the scene's enclosure choice asks for the form (its
-// policy learns on a ray's pieces as on single-pixel blocks); whether any
-// is left. Where a variable appears many times (an expanded polynomial),
-// the natural interval of a piece stays wide however narrow the piece,
-// and a ray bisected thousands of pieces the form rejects at once.
-fn affine_rejects(tr: &Scope<'_>, bx: IBox, cand: &mut Vec<u32>, st: &mut TileState) -> bool {
-    if st.affine.affine_wanted(tr.ctx.enclosure, 0) {
-        cand.retain(
-            |&k| match affine::affine_signs(&tr.ctx, k as usize, bx, &mut st.stats) {
-                Some(s) => {
-                    let free = s.positive();
-                    st.stats.affine_wins += u64::from(free);
-                    st.affine.record(0, free);
-                    !free
-                }
-                None => true,
-            },
-        );
+// Where the scene's enclosure choice asks for them (the policy learns on
+// a ray's pieces as on single-pixel blocks), the affine forms along the
+// ray: drops from `cand` the objects they prove free of surface on the
+// piece, and returns the hull of the parts where the rest may have
+// theirs (`None`: none left). Where a variable appears many times (an
+// expanded polynomial) the natural interval of a piece stays wide however
+// narrow the piece, so a ray bisected thousands of pieces that the form,
+// which keeps the ray's coordinates tied, rejects or clips at once.
+fn affine_narrows(
+    tr: &Scope<'_>,
+    ray: &PixelRay,
+    (a, b): Piece,
+    bx: IBox,
+    cand: &mut Vec<u32>,
+    st: &mut TileState,
+) -> Option<Piece> {
+    if !st.affine_along.affine_wanted(tr.ctx.enclosure, 0) {
+        return (!cand.is_empty()).then_some((a, b));
     }
-    !cand.is_empty()
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    cand.retain(|&k| {
+        let along = affine::affine_along_ray(&tr.ctx, k as usize, ray, (a, b), bx, &mut st.stats);
+        let (pa, pb) = match along {
+            None => (a, b),
+            Some(AlongRay::Free) => (f64::INFINITY, f64::NEG_INFINITY),
+            Some(AlongRay::Within(pa, pb)) => (pa, pb),
+        };
+        if along.is_some() {
+            // A win: the object is dropped, or its part is at most half.
+            let win = pb - pa <= 0.5 * (b - a);
+            st.stats.affine_wins += u64::from(win);
+            st.affine_along.record(0, win);
+        }
+        lo = lo.min(pa);
+        hi = hi.max(pb);
+        pa <= pb
+    });
+    (!cand.is_empty()).then_some((lo, hi))
 }
 
 // A narrow piece with 0 ∈ F: refine a sign change if the ends show one,
