@@ -10,7 +10,7 @@ use ibeam::bench::accuracy::{
 use ibeam::eval::Evaluator;
 use ibeam::eval::interp::Interpreter;
 use ibeam::ir::passes::simplify;
-use ibeam::render::{Aa, Method, RenderOptions, RenderOutput, render_aa};
+use ibeam::render::{Aa, Enclosure, Method, RenderOptions, RenderOutput, render_aa};
 use ibeam::scene::Scene;
 
 fn example(name: &str) -> PathBuf {
@@ -216,11 +216,15 @@ fn iaa_never_loses_surface_on_a_thin_feature() {
 fn accuracy_sweep_writes_its_files_and_obeys_the_obvious_relations() {
     let dir = std::env::temp_dir().join(format!("ibeam-aa-test-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    let rows = run_accuracy(&[example("sphere")], &dir, 12, &interp).unwrap();
+    let rows = run_accuracy(&[example("sphere")], &dir, 12, Enclosure::Affine, &interp).unwrap();
     let csv = std::fs::read_to_string(dir.join("accuracy.csv")).unwrap();
     let mut lines = csv.lines();
     assert_eq!(lines.next(), Some(CSV_HEADER));
-    assert_eq!(lines.count(), rows.len());
+    // Every line names the enclosure its render used.
+    let lines: Vec<&str> = lines.collect();
+    assert_eq!(lines.len(), rows.len());
+    assert!(lines.iter().all(|l| l.split(',').nth(3) == Some("affine")));
+    assert!(rows.iter().all(|r| r.enclosure == Enclosure::Affine));
     assert_eq!(rows.len(), 1 + default_variants().len());
     let png = image::open(dir.join("accuracy.png")).unwrap();
     assert!(png.width() >= 400 && png.height() >= 300);
@@ -330,7 +334,7 @@ fn sweep_of_a_custom_variant_list_has_one_row_each() {
         .into_iter()
         .filter(|v| v.method == Method::Beam && v.aa == Aa::None)
         .collect();
-    let rows = sweep_scene("sphere", &scene, &evals, 8, &v, 1).unwrap();
+    let rows = sweep_scene("sphere", &scene, &evals, 8, &v, 1, Enclosure::Auto).unwrap();
     assert_eq!(rows.len(), 2);
     assert!(rows[1].pareto);
 }

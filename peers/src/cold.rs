@@ -80,6 +80,8 @@ pub struct ColdRender<'a> {
     pub out: &'a Path,
     /// File stem of this render's outputs.
     pub stem: &'a str,
+    /// `--enclosure`'s value.
+    pub enclosure: &'a str,
 }
 
 impl ColdRender<'_> {
@@ -95,7 +97,8 @@ impl ColdRender<'_> {
             .arg(file(if self.layers { "-colour.png" } else { ".png" }))
             .args(["--size", &format!("{0}x{0}", self.size)])
             .args(["--threads", &self.threads.to_string()])
-            .args(["--no-shadows", "--quiet", "--stats-json"])
+            .args(["--no-shadows", "--quiet", "--enclosure", self.enclosure])
+            .arg("--stats-json")
             .arg(&stats)
             .args(camera_flags(self.view));
         if self.layers {

@@ -15,7 +15,7 @@ use std::sync::mpsc::{Receiver, RecvTimeoutError, channel};
 use std::time::{Duration, Instant};
 
 use ibeam::eval::{EvalKind, build_evaluators};
-use ibeam::render::{RenderOptions, render};
+use ibeam::render::{Enclosure, RenderOptions, render};
 use ibeam::scene::Scene;
 
 use crate::views::{View, camera};
@@ -36,6 +36,8 @@ pub struct WorkerSpec {
     pub models: PathBuf,
     /// Seed of the random spheres.
     pub seed: u64,
+    /// ibeam's enclosure choice by its `--enclosure` name.
+    pub enclosure: String,
 }
 
 impl WorkerSpec {
@@ -53,6 +55,8 @@ impl WorkerSpec {
             self.models.display().to_string(),
             "--seed".into(),
             self.seed.to_string(),
+            "--enclosure".into(),
+            self.enclosure.clone(),
         ]
     }
 }
@@ -100,6 +104,11 @@ pub fn worker_main(spec: &WorkerSpec) -> i32 {
     opts.threads = Some(spec.threads);
     opts.want_depth = !spec.workload.is_2d();
     opts.want_normals = !spec.workload.is_2d();
+    opts.enclosure = match spec.enclosure.as_str() {
+        "interval" => Enclosure::Interval,
+        "affine" => Enclosure::Affine,
+        _ => Enclosure::Auto,
+    };
     // Only the images are kept, as Fidget's side keeps only its image.
     opts.want_buffers = false;
 

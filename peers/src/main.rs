@@ -79,6 +79,10 @@ struct Args {
     /// Leave out the cold mode (and the default render of a flat model).
     #[arg(long)]
     no_cold: bool,
+    /// ibeam's enclosure (`ibeam render --enclosure`), in both modes; the
+    /// table says which.
+    #[arg(long, default_value = "auto", value_parser = ["interval", "affine", "auto"])]
+    enclosure: String,
     /// Internal: render one workload for the parent process (see ibeam_side).
     #[arg(long, hide = true)]
     worker: Option<String>,
@@ -130,6 +134,7 @@ fn main() {
             threads: args.threads,
             models: args.models.clone(),
             seed: args.seed,
+            enclosure: args.enclosure.clone(),
         };
         std::process::exit(ibeam_side::worker_main(&spec));
     }
@@ -233,7 +238,11 @@ fn run(args: &Args) -> Result<(), String> {
         }
         _ => None,
     };
-    let text = table::markdown(&rows, flat.as_ref(), args.size, args.timeout);
+    let text = format!(
+        "ibeam's enclosure: `{}` (`--enclosure`)\n\n{}",
+        args.enclosure,
+        table::markdown(&rows, flat.as_ref(), args.size, args.timeout)
+    );
     println!("\n{text}");
     write(&args.out.join("results.md"), &text)?;
     write(
@@ -294,6 +303,7 @@ fn run_case(args: &Args, setup: &Setup, case: &Case, skip: bool) -> Row {
         threads: args.threads,
         models: setup.models.clone(),
         seed: args.seed,
+        enclosure: args.enclosure.clone(),
     };
     let mut warm = if skip {
         Err(Outcome::Skipped)
@@ -355,6 +365,7 @@ fn run_case(args: &Args, setup: &Setup, case: &Case, skip: bool) -> Row {
                 threads: args.threads,
                 out: &args.out,
                 stem: &stem,
+                enclosure: &args.enclosure,
             };
             match render.run(setup.limit) {
                 Ok(t) => {

@@ -27,7 +27,7 @@ use std::sync::Arc;
 
 use super::plot::plot;
 use crate::eval::Evaluator;
-use crate::render::{Aa, Method, RenderError, RenderOptions, RenderOutput, render_aa};
+use crate::render::{Aa, Enclosure, Method, RenderError, RenderOptions, RenderOutput, render_aa};
 use crate::scene::Scene;
 
 /// The reference: guaranteed per-pixel rays, 16×16 per pixel.
@@ -220,6 +220,8 @@ pub struct AccuracyRow {
     pub family: Family,
     /// Parameter within the series.
     pub param: String,
+    /// The enclosure choice the render ran with (`--enclosure`).
+    pub enclosure: Enclosure,
     /// Render wall time, ms (best of the repeats).
     pub time_ms: f64,
     /// RMSE of linear colour against the reference.
@@ -239,7 +241,7 @@ pub struct AccuracyRow {
 }
 
 /// The CSV header, in column order.
-pub const CSV_HEADER: &str = "scene,family,param,time_ms,rmse,max_abs,coverage_diff_pct,missed_surface,samples_mean,rays,pareto";
+pub const CSV_HEADER: &str = "scene,family,param,enclosure,time_ms,rmse,max_abs,coverage_diff_pct,missed_surface,samples_mean,rays,pareto";
 
 /// Why the sweep failed.
 #[derive(Debug)]
@@ -325,10 +327,12 @@ pub fn sweep_scene(
     size: u32,
     variants: &[Variant],
     repeats: u32,
+    enclosure: Enclosure,
 ) -> Result<Vec<AccuracyRow>, AccuracyError> {
     let run = |method: Method, aa: Aa| -> Result<RenderOutput, AccuracyError> {
         let mut opts = RenderOptions::new(size, size);
         opts.method = method;
+        opts.enclosure = enclosure;
         Ok(render_aa(scene, evaluators, &opts, aa)?)
     };
     let reference = run(REFERENCE.0, REFERENCE.1)?;
@@ -339,6 +343,7 @@ pub fn sweep_scene(
             scene: name.to_string(),
             family,
             param: param.to_string(),
+            enclosure,
             time_ms: out.stats.time_ms,
             rmse: e.rmse,
             max_abs: e.max_abs,
@@ -390,6 +395,7 @@ pub fn run_accuracy(
     scenes: &[PathBuf],
     out_dir: &Path,
     size: u32,
+    enclosure: Enclosure,
     make_evaluators: MakeEvaluators<'_>,
 ) -> Result<Vec<AccuracyRow>, AccuracyError> {
     std::fs::create_dir_all(out_dir)
@@ -406,7 +412,7 @@ pub fn run_accuracy(
             |s| s.to_string_lossy().into(),
         );
         rows.extend(sweep_scene(
-            &name, &scene, &evals, size, &variants, REPEATS,
+            &name, &scene, &evals, size, &variants, REPEATS, enclosure,
         )?);
     }
     write_csv(&rows, &out_dir.join("accuracy.csv"))?;
@@ -420,10 +426,11 @@ pub fn write_csv(rows: &[AccuracyRow], path: &Path) -> Result<(), AccuracyError>
     s.push('\n');
     for r in rows {
         s.push_str(&format!(
-            "{},{},{},{:.3},{:.6e},{:.6},{:.3},{},{:.3},{},{}\n",
+            "{},{},{},{},{:.3},{:.6e},{:.6},{:.3},{},{:.3},{},{}\n",
             r.scene,
             r.family,
             r.param,
+            r.enclosure.name(),
             r.time_ms,
             r.rmse,
             r.max_abs,
@@ -447,6 +454,7 @@ mod tests {
             scene: "s".into(),
             family: Family::Beam,
             param: String::new(),
+            enclosure: Enclosure::Auto,
             time_ms: t,
             rmse: e,
             max_abs: 0.0,
@@ -492,6 +500,7 @@ mod tests {
         let mk = |family: Family, param: &str, time_ms: f64, rmse: f64| AccuracyRow {
             family,
             param: param.into(),
+            enclosure: Enclosure::Auto,
             time_ms,
             rmse,
             ..r(0.0, 0.0)

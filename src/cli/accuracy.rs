@@ -5,6 +5,7 @@
 
 use std::path::PathBuf;
 
+use super::image::EnclosureArg;
 use super::{CliError, EvalKind};
 use ibeam::bench::accuracy::{iaa_versus_grid, run_accuracy};
 use ibeam::render::MAX_SIZE;
@@ -24,6 +25,9 @@ pub struct Args {
     /// Evaluator: native code (default) or the reference interpreter.
     #[arg(long = "eval", value_enum, default_value_t = EvalKind::Jit)]
     pub eval: EvalKind,
+    /// Enclosure every render uses, as `ibeam render --enclosure`.
+    #[arg(long, value_enum, default_value_t = EnclosureArg::Auto)]
+    pub enclosure: EnclosureArg,
 }
 
 /// Runs the sweep and prints the table.
@@ -40,17 +44,19 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     let make = move |scene: &ibeam::scene::Scene| {
         super::build_evaluators(scene, kind).map_err(|e| e.to_string())
     };
-    let rows = run_accuracy(&scenes, &args.out, args.size, &make)?;
+    let enclosure = args.enclosure.enclosure();
+    let rows = run_accuracy(&scenes, &args.out, args.size, enclosure, &make)?;
     println!(
-        "| scene | method | param | time ms | RMSE | max abs | coverage diff % | missed surface | samples/px | Pareto |"
+        "| scene | method | param | enclosure | time ms | RMSE | max abs | coverage diff % | missed surface | samples/px | Pareto |"
     );
-    println!("|---|---|---|---:|---:|---:|---:|---:|---:|:-:|");
+    println!("|---|---|---|---|---:|---:|---:|---:|---:|---:|:-:|");
     for r in &rows {
         println!(
-            "| {} | {} | {} | {:.1} | {:.2e} | {:.3} | {:.2} | {} | {:.2} | {} |",
+            "| {} | {} | {} | {} | {:.1} | {:.2e} | {:.3} | {:.2} | {} | {:.2} | {} |",
             r.scene,
             r.family,
             r.param,
+            r.enclosure.name(),
             r.time_ms,
             r.rmse,
             r.max_abs,

@@ -106,6 +106,17 @@ pub enum Enclosure {
     Auto,
 }
 
+impl Enclosure {
+    /// The name `--enclosure` takes for it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Enclosure::Interval => "interval",
+            Enclosure::Affine => "affine",
+            Enclosure::Auto => "auto",
+        }
+    }
+}
+
 impl RenderOptions {
     /// Beam method, default threads, colour image only.
     pub fn new(width: u32, height: u32) -> RenderOptions {

@@ -237,9 +237,12 @@ fn affine_narrows(
         };
         if along.is_some() {
             // A win: the object is dropped, or its part is at most half.
+            // The policy counts drops only: a try costs some twenty
+            // interval evaluations, and a clip saves a few bisections
+            // (docs/performance.md).
             let win = pb - pa <= 0.5 * (b - a);
             st.stats.affine_wins += u64::from(win);
-            st.affine_along.record(0, win);
+            st.affine_along.record(0, pa > pb);
         }
         lo = lo.min(pa);
         hi = hi.max(pb);
