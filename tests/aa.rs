@@ -241,6 +241,7 @@ fn accuracy_sweep_writes_its_files_and_obeys_the_obvious_relations() {
     let draw = |method: Method, aa: Aa| {
         let mut o = RenderOptions::new(12, 12);
         o.method = method;
+        o.enclosure = Enclosure::Affine;
         render_aa(&scene, &evals, &o, aa).unwrap()
     };
     let reference_image = draw(REFERENCE.0, REFERENCE.1);
