@@ -83,12 +83,16 @@ impl Inner {
 }
 
 /// Functions with more live ops than this never compile their derivative
-/// kinds: those are not bit for bit the interpreter's (rounding order in
-/// the chain rules), so they cannot be swapped in once compiled, and
-/// compiling them for a function this long would stop a render for
-/// seconds. The function's tape ([`TapeEvaluator`], the interpreter's
-/// rules and bits) answers them.
-pub const DERIVATIVES_MAX_OPS: usize = 4096;
+/// kinds in the background mode: those are not bit for bit the
+/// interpreter's (rounding order in the chain rules), so they cannot be
+/// swapped in once compiled, and compile at first use on the calling
+/// thread, which waits. The function's tape ([`TapeEvaluator`], the
+/// interpreter's rules and bits) answers them. Functions this long are
+/// unions whose work runs on pruned tapes: 100 spheres (1,403 ops) asked
+/// the whole function for 30 derivatives in a 1024² render and waited
+/// 90–200 ms for two derivative kinds to compile; colonnade (795 ops)
+/// asks 2,575 and keeps its native ones.
+pub const DERIVATIVES_MAX_OPS: usize = 1024;
 
 /// Calls of one kind (a batch counts each box or point) that the tape
 /// answers in the background mode before that kind starts compiling.
