@@ -142,8 +142,7 @@ pub(crate) fn point_segment_free(
 ) -> (bool, Option<f64>) {
     if let Some(s) = blocker {
         let p = (start + s * end.from(start)).to_array();
-        let all = 0..tr.ctx.evals.len();
-        if inside_a_solid(tr, p, &bounds_box(&tr.ctx.bounds), all, &mut st.stats) {
+        if hint_blocked(tr, p, st) {
             return (false, Some(s));
         }
     }
@@ -435,6 +434,28 @@ fn inside_a_solid(
     st: &mut RenderStats,
 ) -> bool {
     (0..3).all(|i| bounds[i].contains(p[i])) && objects.any(|k| tr.ctx.point(k, p, st) < 0.0)
+}
+
+// Whether the blocker hint `p` lies inside a solid (see
+// `point_segment_free`), on the evaluators of the smallest cell holding it
+// where pieces run cells': the point lies far outside the tile's beam,
+// where the tile's evaluators run the whole function's native code
+// (3000 spheres: 42 000 ops a point, 15% of the render), while a fine
+// cell's pruned tape has the same sign at every point of its region, so
+// the same answer, in a few hundred ops.
+fn hint_blocked(tr: &Scope<'_>, p: [f64; 3], st: &mut TileState) -> bool {
+    let bounds = bounds_box(&tr.ctx.bounds);
+    if !(0..3).all(|i| bounds[i].contains(p[i])) {
+        return false;
+    }
+    let all = 0..tr.ctx.evals.len();
+    let cell = (tr.pruner.enabled && tr.ctx.large)
+        .then(|| CellTapes::holding(tr, &point_box(p), st))
+        .flatten();
+    match cell {
+        Some(set) => inside_a_solid(&tr.with_evals(&set), p, &bounds, all, &mut st.stats),
+        None => inside_a_solid(tr, p, &bounds, all, &mut st.stats),
+    }
 }
 
 // What `Segments::piece` proved.
