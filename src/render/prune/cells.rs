@@ -43,7 +43,7 @@ use crate::render::prune::scope::TileState;
 /// The finest level of cells.
 const MAX_LEVEL: u32 = 5;
 /// The finest level of the render's shared cells (at most 8^3 of them).
-const SHARED_LEVEL: u32 = 3;
+const SHARED_LEVEL: u32 = 4;
 /// Functions shorter than this are not pruned further down the tree.
 const CELL_MIN_OPS: usize = 2 * PRUNE_MIN_OPS;
 /// The most ops of pruned tapes one tile's cells hold (about 40 bytes an
