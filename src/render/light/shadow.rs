@@ -6,12 +6,15 @@
 //! solid. `docs/tracer.md` states where a segment starts, when a piece is
 //! free and what each shortcut saves.
 
+use std::sync::Arc;
+
 use glam::DVec3;
 
 use super::reach;
 use super::shade::HitSurface;
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_hull, box_meet, point_box};
+use crate::render::context::EvalSet;
 use crate::render::context::stats::RenderStats;
 use crate::render::enclose::monotone::increasing_along;
 use crate::render::enclose::proof;
@@ -293,7 +296,17 @@ impl Search for FreeSearch<'_, '_> {
             // of this width to the whole function (3000 spheres: 5 times
             // as many whole-function pieces).
             if let Some(set) = CellTapes::holding(tr, &clip, self.st) {
-                return Visit::Specialise(set);
+                if !same_evals(&set, tr) {
+                    return Visit::Specialise(EvalSet::clone(&set));
+                }
+                // The cell these evaluators already are (the halves of a
+                // piece of the finest cells mostly are): the piece goes on
+                // here, counted as the nested sweep would count it again,
+                // without a scope and a stack built for it.
+                at.pieces += 1;
+                if at.pieces > MAX_SHADOW_PIECES {
+                    return Visit::Stop(());
+                }
             }
         }
         self.maybe.clear();
@@ -434,6 +447,13 @@ fn inside_a_solid(
     st: &mut RenderStats,
 ) -> bool {
     (0..3).all(|i| bounds[i].contains(p[i])) && objects.any(|k| tr.ctx.point(k, p, st) < 0.0)
+}
+
+// Whether `set` holds the very evaluators `tr` runs.
+fn same_evals(set: &EvalSet, tr: &Scope<'_>) -> bool {
+    let ours = tr.ctx.evals.iter();
+    set.evals.len() == tr.ctx.evals.len()
+        && set.evals.iter().zip(ours).all(|(a, b)| Arc::ptr_eq(a, b))
 }
 
 // Whether the blocker hint `p` lies inside a solid (see

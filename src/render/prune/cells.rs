@@ -30,8 +30,9 @@
 //! [`CELL_TILE_OPS`] ops of tapes, in its own fixed order; past that its
 //! pieces take the deepest cell it has.
 
-use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
+
+use rustc_hash::FxHashMap;
 
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_within};
@@ -54,7 +55,10 @@ const CELL_TILE_OPS: usize = 1 << 20;
 type CellKey = (u32, [u32; 3]);
 
 /// A shared cell's slot, filled once by the first tile that asks.
-type Slot = Arc<OnceLock<Option<EvalSet>>>;
+type Slot = Arc<OnceLock<Option<Cell>>>;
+
+/// A cell's evaluators, shared by every piece that runs them.
+pub(crate) type Cell = Arc<EvalSet>;
 
 /// The render's cells of levels up to [`SHARED_LEVEL`], and the whole
 /// functions they are pruned from.
@@ -63,7 +67,7 @@ pub(crate) struct SharedCells {
     // The whole functions' evaluators (empty where the scope was made for
     // tests without them: cells then prune from the asking scope's).
     whole: Option<EvalSet>,
-    cells: Mutex<HashMap<CellKey, Slot>>,
+    cells: Mutex<FxHashMap<CellKey, Slot>>,
 }
 
 impl SharedCells {
@@ -77,7 +81,7 @@ impl SharedCells {
 
     // Shared cell `key`'s evaluators, building it (and its ancestors) now
     // if no tile has asked yet (outside the map's lock).
-    fn evals(&self, tr: &Scope<'_>, key: CellKey, st: &mut TileState) -> Option<EvalSet> {
+    fn evals(&self, tr: &Scope<'_>, key: CellKey, st: &mut TileState) -> Option<Cell> {
         let slot = {
             let mut map = self.cells.lock().unwrap_or_else(|e| e.into_inner());
             Arc::clone(map.entry(key).or_default())
@@ -115,7 +119,7 @@ impl std::fmt::Debug for SharedCells {
 #[derive(Clone, Default)]
 pub(crate) struct CellTapes {
     // Each cell's evaluators (`None`: the whole functions').
-    cells: HashMap<CellKey, Option<EvalSet>>,
+    cells: FxHashMap<CellKey, Option<Cell>>,
     // Ops of the tapes the cells hold.
     ops: usize,
 }
@@ -130,7 +134,7 @@ impl CellTapes {
     /// The evaluators of the smallest cell whose region holds `b`, built
     /// now if no one has asked yet; `None` when no cell's region holds it
     /// (it leaves the bounds) or nothing prunes there.
-    pub(crate) fn holding(tr: &Scope<'_>, b: &IBox, st: &mut TileState) -> Option<EvalSet> {
+    pub(crate) fn holding(tr: &Scope<'_>, b: &IBox, st: &mut TileState) -> Option<Cell> {
         let key = smallest_cell(tr, b)?;
         let shared = Arc::clone(&tr.pruner.cells);
         if key.0 <= SHARED_LEVEL {
@@ -149,7 +153,7 @@ impl CellTapes {
         shared: &SharedCells,
         key: CellKey,
         st: &mut TileState,
-    ) -> Option<EvalSet> {
+    ) -> Option<Cell> {
         if let Some(e) = self.cells.get(&key) {
             return e.clone();
         }
@@ -177,10 +181,10 @@ impl CellTapes {
 // (0 where it keeps its parent's).
 fn prune_cell(
     root: &Scope<'_>,
-    parent: Option<EvalSet>,
+    parent: Option<Cell>,
     key: CellKey,
     st: &mut TileState,
-) -> (Option<EvalSet>, usize) {
+) -> (Option<Cell>, usize) {
     let local;
     let from = match &parent {
         Some(set) => {
@@ -202,18 +206,16 @@ fn prune_cell(
     };
     let own = from.pruned_to(cell_region(root, key), st);
     match own.map(|own| (own.live_ops.iter().sum::<usize>(), own)) {
-        Some((ops, own)) if 2 * ops <= before => (Some(own), ops),
+        Some((ops, own)) if 2 * ops <= before => (Some(Arc::new(own)), ops),
         _ => (parent, 0),
     }
 }
 
 // The ops of the whole functions, which a cell without a parent is
-// measured against. `tr` may be a cell's own scope (a nested sweep looking
-// up the cell of a narrower piece): measured against its few hundred ops,
-// every cell it built first, pruned from the whole functions, looked no
-// smaller than its source and was left to the whole functions for the
-// rest of the tile (3000 spheres: most shadow pieces that ran the whole
-// function).
+// measured against whoever asks: measured against a nested sweep's scope
+// (a cell's few hundred ops), every cell looked no smaller than its source
+// and was left to the whole functions (3000 spheres: most shadow pieces
+// ran the whole function).
 fn whole_ops(tr: &Scope<'_>) -> usize {
     let tapes = tr.pruner.tapes.iter();
     tapes
