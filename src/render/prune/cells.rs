@@ -5,8 +5,8 @@
 //! segment leaves its tile's beam at once: it used to run the whole
 //! function, and on a union of 1000 spheres that took 40 s of a 256²
 //! render. A segment's pieces instead take the evaluators of the smallest
-//! cell holding them, each cell pruned once per tile from its parent
-//! cell's. A tile's segments start close together and run parallel (or
+//! cell holding them, each cell pruned once from its parent cell's (per
+//! render or per tile, below). A tile's segments start close together and run parallel (or
 //! towards one point light), so they meet the same few cells.
 //!
 //! Level `L` cuts the bounds into `2^L` cells along each axis. A cell's
