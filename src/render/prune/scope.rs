@@ -75,7 +75,7 @@ pub(crate) fn gain(answer: &dyn Evaluator) -> usize {
 #[derive(Clone)]
 pub(crate) struct Pruner {
     /// The tape of each whole function that is large enough to prune.
-    pub tapes: Vec<Option<Arc<Tape>>>,
+    pub tapes: Arc<[Option<Arc<Tape>>]>,
     /// Prune large functions to tiles and blocks.
     pub enabled: bool,
     /// Evaluators pruned to groups of tiles, which tiles prune theirs
@@ -575,7 +575,7 @@ impl Pruner {
     /// A pruner of `n` objects that prunes nothing.
     fn off(n: usize) -> Pruner {
         Pruner {
-            tapes: vec![None; n],
+            tapes: vec![None; n].into(),
             enabled: false,
             groups: Arc::default(),
             cells: Arc::default(),
