@@ -416,3 +416,26 @@ fn shadows_through_a_large_union_match_exact_segment_tests() {
 fn dist_between(a: &[f64; 3], b: &[f64; 3]) -> f64 {
     (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt()
 }
+
+/// Shadows through a union large enough for the shadow cells (see
+/// `render::cells`), whose coarse cells the render's tiles share, each
+/// built by whichever thread asks first: the image, the depths and the
+/// counters do not depend on the thread count, or on which thread won.
+#[test]
+fn shared_shadow_cells_do_not_depend_on_the_threads() {
+    let text = spheres_scene(300, 0.05, CORNER_VIEW, true);
+    let sc = ibeam::lang::load_scene_source("cells.ib", &text).unwrap();
+    let evals = ibeam::eval::build_evaluators(&sc, ibeam::eval::EvalKind::Jit).unwrap();
+    let mut o = opts(96, 96, Method::Beam);
+    let one = run(&sc, evals.clone(), &o);
+    assert!(one.stats.shadow_rays > 0 && one.stats.pruned_ops_before > 0);
+    for threads in [2, 2, 3] {
+        o.threads = Some(threads);
+        let many = run(&sc, evals.clone(), &o);
+        assert_eq!(one.image.as_raw(), many.image.as_raw(), "{threads} threads");
+        assert_eq!(one.depth_t, many.depth_t);
+        assert_eq!(one.stats.interval_evals, many.stats.interval_evals);
+        assert_eq!(one.stats.shadow_rays, many.stats.shadow_rays);
+        assert_eq!(one.stats.pruned_ops_before, many.stats.pruned_ops_before);
+    }
+}

@@ -49,7 +49,7 @@ pub(crate) struct Context<'a> {
     /// none is).
     pub regions: &'a [Option<Arc<Regional>>],
     /// Each object's linear colour.
-    pub colors: Vec<[f64; 3]>,
+    pub colors: Arc<[[f64; 3]]>,
     /// Which enclosure tightens a block's interval (see
     /// `enclose::mean_value::sign_bound`).
     pub enclosure: Enclosure,
@@ -116,7 +116,7 @@ impl<'a> Context<'a> {
     pub(crate) fn with_camera(&self, cam: RayCamera) -> Context<'a> {
         Context {
             cam,
-            colors: self.colors.clone(),
+            colors: Arc::clone(&self.colors),
             live_ops: self.live_ops.clone(),
             affine_tapes: Arc::clone(&self.affine_tapes),
             ..*self
@@ -132,7 +132,7 @@ impl<'a> Context<'a> {
         Context {
             evals: &set.evals,
             regions: &set.regions,
-            colors: self.colors.clone(),
+            colors: Arc::clone(&self.colors),
             live_ops: set.live_ops.clone(),
             affine_tapes: Arc::clone(&self.affine_tapes),
             ..*self
@@ -313,7 +313,7 @@ impl<'a> Context<'a> {
             regions: &[],
             enclosure: Enclosure::Interval,
             affine_tapes: Arc::new([]),
-            colors: vec![[1.0; 3]; evals.len()],
+            colors: vec![[1.0; 3]; evals.len()].into(),
             lights,
             bounds: Bounds::default(),
             diag: 7.0,
@@ -336,7 +336,7 @@ impl Context<'static> {
             regions: &[],
             enclosure: Enclosure::Interval,
             affine_tapes: Arc::new([]),
-            colors: vec![],
+            colors: Arc::new([]),
             lights: &[],
             bounds: Bounds {
                 min: [-1.0, -0.5, -2.0],

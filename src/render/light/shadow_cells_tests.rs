@@ -105,9 +105,7 @@ fn cells_do_not_depend_on_the_scope_asking_first() {
     let cell_box =
         |c: [f64; 3]| -> IBox { std::array::from_fn(|i| Interval::new(c[i], c[i] + 0.05)) };
     let (near, far) = (cell_box([-0.6, -0.6, -0.6]), cell_box([0.6, 0.5, 0.6]));
-    let ops = |set: &Option<crate::render::context::EvalSet>| {
-        set.as_ref().map(|s| s.live_ops.iter().sum::<usize>())
-    };
+    let ops = |set: &Option<cells::Cell>| set.as_ref().map(|s| s.live_ops.iter().sum::<usize>());
     // Asked from the top: the far box's cell prunes.
     let mut fresh = TileState::default();
     let from_top = CellTapes::holding(&tr, &far, &mut fresh);
@@ -161,4 +159,76 @@ fn pieces_after_one_without_a_cell_still_run_cells() {
         on_whole * 12 < pieces as usize,
         "{on_whole} of {pieces} interval evaluations on the whole function"
     );
+}
+
+// The render's cells are the same whichever tile asks first, in whatever
+// order and from whatever scope (a tile's, or a cell's own in a nested
+// sweep): a cell is pruned from its parent cell or the whole functions,
+// never from the asker's, so images do not depend on thread order. Each
+// is built once: a second tile asking gets the first one's and prunes
+// nothing.
+#[test]
+fn shared_cells_do_not_depend_on_who_asks_first() {
+    let scene = balls_scene(balls(400, -0.9, 0.9, 0.04));
+    let evals = build_evaluators(&scene, EvalKind::Interp).expect("evaluators");
+    let cam = RayCamera::new(&scene.camera, 16, 16).expect("camera");
+    let mut rng = Rng::new(17);
+    // Boxes of the levels 2 to 5 (cells 1, 0.5, 0.25, 0.125 wide).
+    let boxes: Vec<IBox> = (0..40)
+        .map(|i| {
+            let w = [0.9, 0.45, 0.2, 0.1][i % 4];
+            std::array::from_fn(|_| {
+                let lo = rng.range(-1.0, 1.0 - w);
+                Interval::new(lo, lo + w)
+            })
+        })
+        .collect();
+    let ask = |order: &mut dyn Iterator<Item = usize>, nested: bool| {
+        let tr = Scope::new(&scene, &evals, cam, true);
+        let mut st = TileState::default();
+        let inner = CellTapes::holding(&tr, &boxes[1], &mut st).expect("a cell prunes");
+        let cell_scope = tr.with_evals(&inner);
+        let asker = if nested { &cell_scope } else { &tr };
+        let mut got = vec![None; boxes.len()];
+        for i in order {
+            got[i] = CellTapes::holding(asker, &boxes[i], &mut st);
+        }
+        got
+    };
+    let forward = ask(&mut (0..boxes.len()), false);
+    let backward = ask(&mut (0..boxes.len()).rev(), true);
+    let mut pruned = 0;
+    for (i, (f, b)) in forward.iter().zip(&backward).enumerate() {
+        let (Some(f), Some(b)) = (f, b) else {
+            assert!(f.is_none() && b.is_none(), "box {i}");
+            continue;
+        };
+        pruned += 1;
+        assert_eq!(f.live_ops, b.live_ops, "box {i}");
+        for _ in 0..20 {
+            let sub: IBox = std::array::from_fn(|k| {
+                let (lo, w) = (boxes[i][k].lo, boxes[i][k].width());
+                let a = lo + w * rng.range(0.0, 0.9);
+                Interval::new(a, a + 0.1 * w)
+            });
+            let (x, y) = (f.evals[0].interval(sub), b.evals[0].interval(sub));
+            assert_eq!(
+                (x.lo.to_bits(), x.hi.to_bits()),
+                (y.lo.to_bits(), y.hi.to_bits())
+            );
+        }
+    }
+    assert!(
+        pruned >= 30,
+        "{pruned} of {} boxes in pruned cells",
+        boxes.len()
+    );
+    // A second tile of one render gets the first tile's shared cells.
+    let tr = Scope::new(&scene, &evals, cam, true);
+    let (mut one, mut two) = (TileState::default(), TileState::default());
+    let first = CellTapes::holding(&tr, &boxes[2], &mut one).expect("a level-4 cell prunes");
+    let again = CellTapes::holding(&tr, &boxes[2], &mut two).expect("the same cell");
+    assert!(Arc::ptr_eq(&first, &again));
+    assert!(one.stats.pruned_ops_before > 0);
+    assert_eq!(two.stats.pruned_ops_before, 0);
 }

@@ -5,8 +5,8 @@
 //! segment leaves its tile's beam at once: it used to run the whole
 //! function, and on a union of 1000 spheres that took 40 s of a 256²
 //! render. A segment's pieces instead take the evaluators of the smallest
-//! cell holding them, each cell pruned once per tile from its parent
-//! cell's. A tile's segments start close together and run parallel (or
+//! cell holding them, each cell pruned once from its parent cell's (per
+//! render or per tile, below). A tile's segments start close together and run parallel (or
 //! towards one point light), so they meet the same few cells.
 //!
 //! Level `L` cuts the bounds into `2^L` cells along each axis. A cell's
@@ -16,14 +16,23 @@
 //! [`MAX_LEVEL`], and a cell whose parent's functions are all shorter than
 //! [`CELL_MIN_OPS`] keeps its parent's.
 //!
-//! The cells belong to the tile (its `TileState`), not to the render:
-//! shared between threads, the cells of a megapixel's segments held about
-//! 850 MB of tapes, and a render-wide budget would make which cells exist,
-//! and so which tape answers, depend on the order the threads asked in.
-//! A tile builds at most [`CELL_TILE_OPS`] ops of tapes, in its own fixed
-//! order; past that its pieces take the deepest cell it has.
+//! Cells of levels up to [`SHARED_LEVEL`] belong to the render
+//! ([`SharedCells`]): each is built once, by the first tile that asks,
+//! from its parent cell's tapes or the whole functions, never from the
+//! asking scope's, so what it holds depends on the cell alone and the
+//! images do not depend on the order the threads asked in. Every tile
+//! used to prune its own copies of them from the whole function (3000
+//! spheres at 1024²: a quarter of the render). The finer cells belong to
+//! the tile (its `TileState`): shared between threads, the cells of a
+//! megapixel's segments held about 850 MB of tapes, and a render-wide
+//! budget would make which cells exist, and so which tape answers, depend
+//! on the order the threads asked in. A tile builds at most
+//! [`CELL_TILE_OPS`] ops of tapes, in its own fixed order; past that its
+//! pieces take the deepest cell it has.
 
-use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
+
+use rustc_hash::FxHashMap;
 
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_within};
@@ -34,6 +43,8 @@ use crate::render::prune::scope::TileState;
 
 /// The finest level of cells.
 const MAX_LEVEL: u32 = 5;
+/// The finest level of the render's shared cells (at most 8^3 of them).
+const SHARED_LEVEL: u32 = 4;
 /// Functions shorter than this are not pruned further down the tree.
 const CELL_MIN_OPS: usize = 2 * PRUNE_MIN_OPS;
 /// The most ops of pruned tapes one tile's cells hold (about 40 bytes an
@@ -43,11 +54,72 @@ const CELL_TILE_OPS: usize = 1 << 20;
 /// A cell: its level and its index along each axis.
 type CellKey = (u32, [u32; 3]);
 
-/// One tile's cells, built as its segments ask for them.
+/// A shared cell's slot, filled once by the first tile that asks.
+type Slot = Arc<OnceLock<Option<Cell>>>;
+
+/// A cell's evaluators, shared by every piece that runs them.
+pub(crate) type Cell = Arc<EvalSet>;
+
+/// The render's cells of levels up to [`SHARED_LEVEL`], and the whole
+/// functions they are pruned from.
+#[derive(Default)]
+pub(crate) struct SharedCells {
+    // The whole functions' evaluators (empty where the scope was made for
+    // tests without them: cells then prune from the asking scope's).
+    whole: Option<EvalSet>,
+    cells: Mutex<FxHashMap<CellKey, Slot>>,
+}
+
+impl SharedCells {
+    /// No cells yet, pruned from `whole` (the scene's own evaluators).
+    pub(crate) fn new(whole: EvalSet) -> SharedCells {
+        SharedCells {
+            whole: Some(whole),
+            cells: Mutex::default(),
+        }
+    }
+
+    // Shared cell `key`'s evaluators, building it (and its ancestors) now
+    // if no tile has asked yet (outside the map's lock).
+    fn evals(&self, tr: &Scope<'_>, key: CellKey, st: &mut TileState) -> Option<Cell> {
+        let slot = {
+            let mut map = self.cells.lock().unwrap_or_else(|e| e.into_inner());
+            Arc::clone(map.entry(key).or_default())
+        };
+        slot.get_or_init(|| {
+            let (level, at) = key;
+            let parent = if level == 0 {
+                None
+            } else {
+                self.evals(tr, (level - 1, at.map(|i| i / 2)), st)
+            };
+            self.with_root(tr, |root| prune_cell(root, parent, key, st).0)
+        })
+        .clone()
+    }
+
+    // Runs `f` on the scope of the whole functions (of `tr` without them).
+    fn with_root<R>(&self, tr: &Scope<'_>, f: impl FnOnce(&Scope<'_>) -> R) -> R {
+        match &self.whole {
+            Some(set) if set.evals.len() == tr.ctx.evals.len() => f(&tr.with_evals(set)),
+            _ => f(tr),
+        }
+    }
+}
+
+impl std::fmt::Debug for SharedCells {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let n = self.cells.lock().map_or(0, |m| m.len());
+        write!(f, "SharedCells({n} cells)")
+    }
+}
+
+/// One tile's cells below [`SHARED_LEVEL`], built as its segments ask for
+/// them.
 #[derive(Clone, Default)]
 pub(crate) struct CellTapes {
     // Each cell's evaluators (`None`: the whole functions').
-    cells: HashMap<CellKey, Option<EvalSet>>,
+    cells: FxHashMap<CellKey, Option<Cell>>,
     // Ops of the tapes the cells hold.
     ops: usize,
 }
@@ -60,78 +132,90 @@ impl std::fmt::Debug for CellTapes {
 
 impl CellTapes {
     /// The evaluators of the smallest cell whose region holds `b`, built
-    /// now if the tile has not asked yet; `None` when no cell's region
-    /// holds it (it leaves the bounds) or nothing prunes there.
-    pub(crate) fn holding(tr: &Scope<'_>, b: &IBox, st: &mut TileState) -> Option<EvalSet> {
+    /// now if no one has asked yet; `None` when no cell's region holds it
+    /// (it leaves the bounds) or nothing prunes there.
+    pub(crate) fn holding(tr: &Scope<'_>, b: &IBox, st: &mut TileState) -> Option<Cell> {
         let key = smallest_cell(tr, b)?;
+        let shared = Arc::clone(&tr.pruner.cells);
+        if key.0 <= SHARED_LEVEL {
+            return shared.evals(tr, key, st);
+        }
         let mut cells = std::mem::take(&mut st.prune.cells);
-        let evals = cells.evals(tr, key, st);
+        let evals = cells.evals(tr, &shared, key, st);
         st.prune.cells = cells;
         evals
     }
 
     // Cell `key`'s evaluators, building it (and its ancestors) if needed.
-    fn evals(&mut self, tr: &Scope<'_>, key: CellKey, st: &mut TileState) -> Option<EvalSet> {
+    fn evals(
+        &mut self,
+        tr: &Scope<'_>,
+        shared: &SharedCells,
+        key: CellKey,
+        st: &mut TileState,
+    ) -> Option<Cell> {
         if let Some(e) = self.cells.get(&key) {
             return e.clone();
         }
-        let e = self.build(tr, key, st);
+        let (level, at) = key;
+        let up = (level - 1, at.map(|i| i / 2));
+        let parent = if up.0 <= SHARED_LEVEL {
+            shared.evals(tr, up, st)
+        } else {
+            self.evals(tr, shared, up, st)
+        };
+        let e = if self.ops >= CELL_TILE_OPS {
+            parent
+        } else {
+            let (e, ops) = shared.with_root(tr, |root| prune_cell(root, parent, key, st));
+            self.ops += ops;
+            e
+        };
         self.cells.insert(key, e.clone());
         e
     }
+}
 
-    // Prunes cell `key`'s functions from its parent's.
-    fn build(
-        &mut self,
-        tr: &Scope<'_>,
-        (level, at): CellKey,
-        st: &mut TileState,
-    ) -> Option<EvalSet> {
-        let parent = if level == 0 {
-            None
-        } else {
-            self.evals(tr, (level - 1, at.map(|i| i / 2)), st)
-        };
-        if self.ops >= CELL_TILE_OPS {
-            return parent;
-        }
-        let local;
-        let from = match &parent {
-            Some(set) => {
-                if set.live_ops.iter().all(|&n| n < CELL_MIN_OPS) {
-                    return parent;
-                }
-                local = tr.with_evals(set);
-                &local
+// Cell `key`'s evaluators pruned from its `parent`'s (`None`: from the
+// whole functions, `root`'s), and the ops of the tapes it keeps of its own
+// (0 where it keeps its parent's).
+fn prune_cell(
+    root: &Scope<'_>,
+    parent: Option<Cell>,
+    key: CellKey,
+    st: &mut TileState,
+) -> (Option<Cell>, usize) {
+    let local;
+    let from = match &parent {
+        Some(set) => {
+            if set.live_ops.iter().all(|&n| n < CELL_MIN_OPS) {
+                return (parent, 0);
             }
-            None => tr,
-        };
-        // A cell keeps tapes of its own only where they are at most half
-        // its parent's: near the root of a union of many objects the cells
-        // keep nearly all of it, and holding those copies spent most of a
-        // tile's budget.
-        let before: usize = match &parent {
-            Some(set) => set.live_ops.iter().sum(),
-            None => whole_ops(tr),
-        };
-        let own = from.pruned_to(cell_region(tr, (level, at)), st);
-        match own.map(|own| (own.live_ops.iter().sum::<usize>(), own)) {
-            Some((ops, own)) if 2 * ops <= before => {
-                self.ops += ops;
-                Some(own)
-            }
-            _ => parent,
+            local = root.with_evals(set);
+            &local
         }
+        None => root,
+    };
+    // A cell keeps tapes of its own only where they are at most half
+    // its parent's: near the root of a union of many objects the cells
+    // keep nearly all of it, and holding those copies spent most of a
+    // tile's budget.
+    let before: usize = match &parent {
+        Some(set) => set.live_ops.iter().sum(),
+        None => whole_ops(root),
+    };
+    let own = from.pruned_to(cell_region(root, key), st);
+    match own.map(|own| (own.live_ops.iter().sum::<usize>(), own)) {
+        Some((ops, own)) if 2 * ops <= before => (Some(Arc::new(own)), ops),
+        _ => (parent, 0),
     }
 }
 
 // The ops of the whole functions, which a cell without a parent is
-// measured against. `tr` may be a cell's own scope (a nested sweep looking
-// up the cell of a narrower piece): measured against its few hundred ops,
-// every cell it built first, pruned from the whole functions, looked no
-// smaller than its source and was left to the whole functions for the
-// rest of the tile (3000 spheres: most shadow pieces that ran the whole
-// function).
+// measured against whoever asks: measured against a nested sweep's scope
+// (a cell's few hundred ops), every cell looked no smaller than its source
+// and was left to the whole functions (3000 spheres: most shadow pieces
+// ran the whole function).
 fn whole_ops(tr: &Scope<'_>) -> usize {
     let tapes = tr.pruner.tapes.iter();
     tapes

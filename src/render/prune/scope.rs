@@ -15,7 +15,7 @@ use crate::render::context::stats::RenderStats;
 use crate::render::context::{Context, EvalSet, PRUNE_MIN_OPS};
 use crate::render::enclose::mean_value::{self, FormPolicy, MeanValueUse};
 use crate::render::enclose::proof::SignBound;
-use crate::render::prune::cells::CellTapes;
+use crate::render::prune::cells::{CellTapes, SharedCells};
 use crate::render::prune::groups::TileGroups;
 use crate::render::view::camera::RayCamera;
 use crate::scene::Scene;
@@ -75,12 +75,15 @@ pub(crate) fn gain(answer: &dyn Evaluator) -> usize {
 #[derive(Clone)]
 pub(crate) struct Pruner {
     /// The tape of each whole function that is large enough to prune.
-    pub tapes: Vec<Option<Arc<Tape>>>,
+    pub tapes: Arc<[Option<Arc<Tape>>]>,
     /// Prune large functions to tiles and blocks.
     pub enabled: bool,
     /// Evaluators pruned to groups of tiles, which tiles prune theirs
     /// from (shared by the scopes of one camera).
     pub groups: Arc<TileGroups>,
+    /// The render's coarse octree cells for shadow segments (see
+    /// `prune::cells`), shared by every scope of the scene.
+    pub cells: Arc<SharedCells>,
     /// The interior ends, in increasing order, of the slices of the tile
     /// these evaluators are pruned to (empty outside such a tile).
     pub slice_ends: Arc<[f64]>,
@@ -146,12 +149,18 @@ impl<'a> Scope<'a> {
                 Some(Arc::new(Tape::new(f).keeping_signs()))
             })
             .collect();
+        let whole = EvalSet {
+            evals: evals.to_vec(),
+            live_ops: ctx.live_ops.clone(),
+            regions: vec![None; evals.len()],
+        };
         Scope {
             ctx,
             pruner: Pruner {
                 tapes,
                 enabled: prune,
                 groups: Arc::default(),
+                cells: Arc::new(SharedCells::new(whole)),
                 slice_ends: Arc::new([]),
             },
         }
@@ -569,9 +578,10 @@ impl Pruner {
     /// A pruner of `n` objects that prunes nothing.
     fn off(n: usize) -> Pruner {
         Pruner {
-            tapes: vec![None; n],
+            tapes: vec![None; n].into(),
             enabled: false,
             groups: Arc::default(),
+            cells: Arc::default(),
             slice_ends: Arc::new([]),
         }
     }

@@ -1,0 +1,97 @@
+//! The blocker hint of `point_segment_free` against the sweep alone.
+
+use super::*;
+use crate::eval::build::{EvalKind, build_evaluators};
+use crate::ir::random::Rng;
+use crate::render::view::camera::RayCamera;
+use crate::scene::{Bounds, Camera, Light, Object, RenderSettings, Scene};
+
+// Whatever point a blocker hint names, on the segment or off any
+// solid, the answer is the sweep's own; and a hint that falls inside
+// the occluder is where the answer comes from.
+// f = y + 0.5 (a floor) and a ball of radius 0.3 at (0, 0.3, 0).
+fn floor_and_ball() -> Scene {
+    use crate::ir::{BinaryOp, Builder, UnaryOp, Var};
+    let floor = {
+        let mut b = Builder::new();
+        let (y, h) = (b.var(Var::Y), b.constant(0.5));
+        let f = b.binary(BinaryOp::Add, y, h);
+        b.finish(f)
+    };
+    let ball = {
+        let mut b = Builder::new();
+        let (x, y, z) = (b.var(Var::X), b.var(Var::Y), b.var(Var::Z));
+        let (c, r) = (b.constant(0.3), b.constant(0.3));
+        let yc = b.binary(BinaryOp::Sub, y, c);
+        let (x2, y2, z2) = (b.powi(x, 2), b.powi(yc, 2), b.powi(z, 2));
+        let s = b.binary(BinaryOp::Add, x2, y2);
+        let s = b.binary(BinaryOp::Add, s, z2);
+        let d = b.unary(UnaryOp::Sqrt, s);
+        let f = b.binary(BinaryOp::Sub, d, r);
+        b.finish(f)
+    };
+    let object = |name: &str, function| Object {
+        name: name.into(),
+        function,
+        color: [0.8; 3],
+    };
+    Scene {
+        objects: vec![object("floor", floor), object("ball", ball)],
+        camera: Camera::default(),
+        lights: vec![Light {
+            kind: LightKind::Point([0.0, 2.0, 0.0]),
+            color: [1.0; 3],
+            shadows: true,
+        }],
+        bounds: Bounds {
+            min: [-1.0; 3],
+            max: [1.0; 3],
+        },
+        render: RenderSettings::default(),
+    }
+}
+
+// Whatever point a blocker hint names, on the segment or off any
+// solid, the answer is the sweep's own; and a hint that falls inside
+// the occluder is where the answer comes from.
+#[test]
+fn blocker_hints_never_change_the_answer() {
+    let scene = floor_and_ball();
+    let evals = build_evaluators(&scene, EvalKind::Interp).expect("evaluators");
+    let cam = RayCamera::new(&scene.camera, 16, 16).expect("camera");
+    let tr = Scope::new(&scene, &evals, cam, false);
+    let mut st = TileState::default();
+    let light = SegEnd::Point(DVec3::new(0.0, 2.0, 0.0));
+    let mut rng = Rng::new(7);
+    let (mut shadowed, mut settled_by_hint) = (0, 0);
+    for _ in 0..400 {
+        // Points just above the floor, some under the ball.
+        let p = DVec3::new(rng.range(-0.9, 0.9), -0.49, rng.range(-0.9, 0.9));
+        let free = segment_free(&tr, point_box(p.to_array()), &[p], light, 1e-4, &mut st);
+        shadowed += usize::from(!free);
+        for hint in [
+            None,
+            Some(0.0),
+            Some(0.3),
+            Some(0.32),
+            Some(0.5),
+            Some(0.99),
+        ] {
+            let (hinted, found) = point_segment_free(&tr, p, light, 1e-4, hint, &mut st);
+            assert_eq!(hinted, free, "{p:?} with hint {hint:?}");
+            // A point inside a solid is found only on a shadowed segment.
+            assert!(
+                found.is_none() || !free,
+                "{p:?}: found {found:?} on a free segment"
+            );
+            if hint.is_some() && found == hint {
+                settled_by_hint += 1;
+            }
+        }
+    }
+    assert!(
+        shadowed > 20 && shadowed < 380,
+        "shadowed {shadowed} of 400"
+    );
+    assert!(settled_by_hint > 0);
+}
