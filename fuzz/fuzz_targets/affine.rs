@@ -9,7 +9,11 @@
 //!   wherever that is not EMPTY;
 //! - it contains f at the box's corners, centre and sampled points (faces
 //!   hit often) wherever every op's point value is finite (the point rules
-//!   of `ir::semantics`, not the code under test).
+//!   of `ir::semantics`, not the code under test);
+//! - along the ray through the box's diagonal (one noise symbol for the
+//!   ray parameter, `eval::affine::affine_along`), the form contains f at
+//!   sampled points of the ray, and f is positive wherever the form's
+//!   clip (`may_reach_zero`) leaves a point out.
 //!
 //! Bytes: 0..8 seed, 8 depth, 9 flags (bit 0: simplify), then boxes (six
 //! bytes each, two a side), at most 8.
@@ -17,10 +21,12 @@
 #![no_main]
 
 use ibeam::eval::Single;
-use ibeam::eval::affine::AffineEvaluator;
+use ibeam::eval::affine::{AffineEvaluator, affine_along};
 use ibeam::eval::interp::Interpreter;
 use ibeam::eval::tape::Tape;
 use ibeam::interval::Interval;
+use ibeam::interval::affine::along_parameter;
+use ibeam::interval::boxes::ray_box;
 use ibeam::ir::passes;
 use ibeam::ir::random::{Rng, random_function};
 use ibeam::ir::semantics::run_point;
@@ -75,6 +81,39 @@ fn points(b: [Interval; 3], rng: &mut Rng) -> Vec<[f64; 3]> {
     corners.chain(centre).chain(sampled).collect()
 }
 
+/// The ray from `b`'s low corner to its high one, its origin a box a
+/// little wider than rounding (so that points computed on the ray lie on
+/// rays from it), checked as the module doc says; boxes not finite or
+/// not small enough for that margin are skipped.
+fn check_along(f: &ibeam::ir::Function, tape: &Tape, b: [Interval; 3], rng: &mut Rng, ctx: &str) {
+    if !b.iter().all(|s| s.lo.abs() < 1e3 && s.hi.abs() < 1e3) {
+        return;
+    }
+    let om = b.map(|s| s.lo);
+    let dm: [f64; 3] = std::array::from_fn(|i| b[i].hi - b[i].lo);
+    let o = om.map(|c| Interval::new(c - 1e-9, c + 1e-9));
+    let d = dm.map(Interval::point);
+    let t = Interval::new(0.0, 1.0);
+    let v = affine_along(tape, o, d, t, ray_box(o, d, t));
+    let part = v.form.may_reach_zero().and_then(|e| along_parameter(t, e));
+    let mut vals = Vec::new();
+    for k in 0..24 {
+        let tk = if k < 2 { f64::from(k) } else { rng.range(0.0, 1.0) };
+        let shift = rng.pick(&[-0.9e-9, 0.0, 0.9e-9]);
+        let p: [f64; 3] = std::array::from_fn(|i| (om[i] + shift) + dm[i] * tk);
+        run_point(&f.ops, p, &mut vals);
+        if !vals.iter().all(|v| v.is_finite()) {
+            continue;
+        }
+        let fp = vals[f.root.index()];
+        assert!(v.range.contains(fp), "along {b:?} at t = {tk}: {:?} lacks {fp:e} ({ctx})", v.range);
+        assert!(
+            part.is_some_and(|p| p.contains(tk)) || fp > 0.0,
+            "along {b:?}: t = {tk} clipped out by {part:?} where f = {fp:e} ({ctx})"
+        );
+    }
+}
+
 fuzz_target!(|data: &[u8]| {
     if data.len() < 16 {
         return;
@@ -121,5 +160,6 @@ fuzz_target!(|data: &[u8]| {
                 "at {p:?} in {b:?}: affine {a:?} lacks f = {v:e} ({ctx})"
             );
         }
+        check_along(&f, &tape, *b, &mut rng, &ctx);
     }
 });
