@@ -96,6 +96,7 @@ pub(super) fn anti_alias(
             },
             factor: 1 << l,
             background: bg,
+            prune: &mut st.prune,
         };
         let traced = trace_split(fine_tr, job, &mut st.stats);
         let all = sub.get_or_insert_with(|| SplitSamples::none(n));
@@ -108,5 +109,7 @@ pub(super) fn anti_alias(
     let per: Vec<u32> = level.iter().map(|&l| 1 << (2 * l)).collect();
     aa::merge_split(&mut px, &split, sub.as_ref(), &per, &mut st.stats);
     st.stats.aa_cpu_ms += ms_since(t0);
+    // The tile's cells go with it: a finished tile waits for its row.
+    st.prune = Default::default();
     t.state = st;
 }
