@@ -96,9 +96,8 @@ pub(super) fn anti_alias(
             },
             factor: 1 << l,
             background: bg,
-            prune: &mut st.prune,
         };
-        let traced = trace_split(fine_tr, job, &mut st.stats);
+        let traced = trace_split(fine_tr, job, &mut st.prune, &mut st.stats);
         let all = sub.get_or_insert_with(|| SplitSamples::none(n));
         for k in (0..n).filter(|&k| these[k]) {
             all.linear[k] = traced.linear[k];

@@ -90,9 +90,6 @@ pub(super) struct SplitJob<'a> {
     pub factor: u32,
     /// The background colour, linear.
     pub background: [f64; 3],
-    /// The tile's pruning scratch and shadow cells, which the squares
-    /// carry on with in turn (see [`trace_split`]).
-    pub prune: &'a mut PruneScratch,
 }
 
 /// A tile's place in the image, in pixels.
@@ -129,62 +126,23 @@ fn fine_options(opts: &RenderOptions) -> RenderOptions {
 
 // The sub-samples of the job's split pixels, traced with `fine` at the
 // job's factor × the resolution, square by square of `FINE_GROUP` pixels
-// in order,
-// other sub-samples masked out: per pixel of the tile the mean linear
-// colour, covered fraction and nearest hit of its sub-samples (zero,
-// zero, +inf where not split).
+// in order, other sub-samples masked out, carrying on with the tile's
+// pruning scratch `prune`: per pixel of the tile the mean linear colour,
+// covered fraction and nearest hit of its sub-samples (zero, zero, +inf
+// where not split).
 pub(super) fn trace_split(
     fine: &Scope<'_>,
     job: SplitJob<'_>,
+    prune: &mut PruneScratch,
     stats: &mut RenderStats,
 ) -> SplitSamples {
-    let SplitJob {
-        opts,
-        area: TileArea { x0, y0, w, h },
-        split,
-        facts: PixelFacts {
-            floors,
-            hints,
-            brackets,
-        },
-        factor: f,
-        background: bg,
-        prune,
-    } = job;
+    let TileArea { w, h, .. } = job.area;
     let n = (w * h) as usize;
     let mut linear = vec![[0.0; 3]; n];
     let mut coverage = vec![0.0; n];
     let mut depth = vec![f64::INFINITY; n];
-    let fine_opts = fine_options(opts);
+    let fine_opts = fine_options(job.opts);
     let in_tile = |(i, j): (u32, u32)| (j * w + i) as usize;
-    let trace_square = |g: Rect, st: TileState| -> TileOut {
-        let (fw, fh) = ((g.x1 - g.x0) * f, (g.y1 - g.y0) * f);
-        let pixel = |k: usize| {
-            let (i, j) = (k as u32 % fw, k as u32 / fw);
-            in_tile((g.x0 + i / f, g.y0 + j / f))
-        };
-        let nf = (fw * fh) as usize;
-        let mask: Vec<bool> = (0..nf).map(|k| split[pixel(k)]).collect();
-        // Each sub-sample starts where its pixel's area was proven
-        // empty up to: the fine render need not sweep that prefix again.
-        let starts: Vec<EmptyPrefix> = (0..nf).map(|k| floors[pixel(k)]).collect();
-        let fine_hints: Vec<ShadowHint> = (0..nf).map(|k| hints[pixel(k)]).collect();
-        let fine_brackets: Vec<Option<RootBracket>> = (0..nf).map(|k| brackets[pixel(k)]).collect();
-        let spec = TileSpec {
-            x0: (x0 + g.x0) * f,
-            y0: (y0 + g.y0) * f,
-            w: fw,
-            h: fh,
-            mask: Some(&mask),
-            floors: Some(&starts),
-            shadow_hints: Some(&fine_hints),
-            brackets: Some(&fine_brackets),
-            // Too few blocks to learn whether the form pays.
-            mean_value: false,
-            rays_from_floors: false,
-        };
-        render_tile_from(fine, &fine_opts, spec, bg, st)
-    };
     // The squares are traced one after the other, each carrying on with
     // the shadow cells the one before it built (the tile's base render's
     // first): neighbouring squares' segments meet the same cells, and
@@ -193,15 +151,15 @@ pub(super) fn trace_split(
     // docs/performance.md). The order is the tile's alone, so the answers
     // do not depend on the thread count; tiles run in parallel.
     let outs: Vec<(Rect, TileOut)> = squares(w, h, FINE_GROUP)
-        .filter(|g| g.pixels().any(|p| split[in_tile(p)]))
+        .filter(|g| g.pixels().any(|p| job.split[in_tile(p)]))
         .map(|g| {
             let st = TileState {
                 prune: std::mem::take(prune),
                 ..TileState::default()
             };
-            let mut out = trace_square(g, st);
+            let mut out = trace_square(fine, &fine_opts, &job, g, st);
             *prune = std::mem::take(&mut out.state.prune);
-            (g, downsample(out, f))
+            (g, downsample(out, job.factor))
         })
         .collect();
     for (g, out) in &outs {
@@ -219,4 +177,44 @@ pub(super) fn trace_split(
         coverage,
         depth,
     }
+}
+
+// The sub-samples of the split pixels of the square `g` of the job's tile
+// (tile coordinates), traced with `fine` as one masked tile at the job's
+// factor × the resolution, carrying on from `st`.
+fn trace_square(
+    fine: &Scope<'_>,
+    fine_opts: &RenderOptions,
+    job: &SplitJob<'_>,
+    g: Rect,
+    st: TileState,
+) -> TileOut {
+    let (f, TileArea { x0, y0, w, .. }) = (job.factor, job.area);
+    let facts = job.facts;
+    let (fw, fh) = ((g.x1 - g.x0) * f, (g.y1 - g.y0) * f);
+    let pixel = |k: usize| {
+        let (i, j) = (k as u32 % fw, k as u32 / fw);
+        ((g.y0 + j / f) * w + g.x0 + i / f) as usize
+    };
+    let nf = (fw * fh) as usize;
+    let mask: Vec<bool> = (0..nf).map(|k| job.split[pixel(k)]).collect();
+    // Each sub-sample starts where its pixel's area was proven empty up
+    // to: the fine render need not sweep that prefix again.
+    let starts: Vec<EmptyPrefix> = (0..nf).map(|k| facts.floors[pixel(k)]).collect();
+    let hints: Vec<ShadowHint> = (0..nf).map(|k| facts.hints[pixel(k)]).collect();
+    let brackets: Vec<Option<RootBracket>> = (0..nf).map(|k| facts.brackets[pixel(k)]).collect();
+    let spec = TileSpec {
+        x0: (x0 + g.x0) * f,
+        y0: (y0 + g.y0) * f,
+        w: fw,
+        h: fh,
+        mask: Some(&mask),
+        floors: Some(&starts),
+        shadow_hints: Some(&hints),
+        brackets: Some(&brackets),
+        // Too few blocks to learn whether the form pays.
+        mean_value: false,
+        rays_from_floors: false,
+    };
+    render_tile_from(fine, fine_opts, spec, job.background, st)
 }
