@@ -2,6 +2,8 @@
 //! samples, and IAA's sub-samples of split pixels, traced square by square
 //! of the pixels that need them.
 
+use rayon::prelude::*;
+
 use crate::render::RenderOptions;
 use crate::render::aa::SplitSamples;
 use crate::render::context::stats::RenderStats;
@@ -126,8 +128,9 @@ fn fine_options(opts: &RenderOptions) -> RenderOptions {
 
 // The sub-samples of the job's split pixels, traced with `fine` at the
 // job's factor × the resolution, square by square of `FINE_GROUP` pixels
-// in order, other sub-samples masked out, carrying on with the tile's
-// pruning scratch `prune`: per pixel of the tile the mean linear colour,
+// (in order, carrying on with the tile's pruning scratch `prune`, where
+// shadows run cells' tapes), other sub-samples masked out: per pixel of
+// the tile the mean linear colour,
 // covered fraction and nearest hit of its sub-samples (zero, zero, +inf
 // where not split).
 pub(super) fn trace_split(
@@ -143,16 +146,20 @@ pub(super) fn trace_split(
     let mut depth = vec![f64::INFINITY; n];
     let fine_opts = fine_options(job.opts);
     let in_tile = |(i, j): (u32, u32)| (j * w + i) as usize;
-    // The squares are traced one after the other, each carrying on with
-    // the shadow cells the one before it built (the tile's base render's
-    // first): neighbouring squares' segments meet the same cells, and
-    // each square pruning its own from the whole functions made the
-    // sub-samples' shadows 3/4 of an IAA render of 400 spheres (see
-    // docs/performance.md). The order is the tile's alone, so the answers
-    // do not depend on the thread count; tiles run in parallel.
-    let outs: Vec<(Rect, TileOut)> = squares(w, h, FINE_GROUP)
+    let wanted: Vec<Rect> = squares(w, h, FINE_GROUP)
         .filter(|g| g.pixels().any(|p| job.split[in_tile(p)]))
-        .map(|g| {
+        .collect();
+    let outs: Vec<(Rect, TileOut)> = if fine.pruner.enabled && fine.ctx.large {
+        // In a scene whose shadow segments run cells' tapes, the squares
+        // are traced one after the other, each carrying on with the cells
+        // the one before it built (the tile's base render's first):
+        // neighbouring squares' segments meet the same cells, and each
+        // square pruning its own from the whole functions made the
+        // sub-samples' shadows 3/4 of an IAA render of 400 spheres (see
+        // docs/performance.md). The order is the tile's alone, so the
+        // answers do not depend on the thread count; tiles run in
+        // parallel.
+        let mut carry = |g: Rect| {
             let st = TileState {
                 prune: std::mem::take(prune),
                 ..TileState::default()
@@ -160,8 +167,18 @@ pub(super) fn trace_split(
             let mut out = trace_square(fine, &fine_opts, &job, g, st);
             *prune = std::mem::take(&mut out.state.prune);
             (g, downsample(out, job.factor))
-        })
-        .collect();
+        };
+        wanted.into_iter().map(&mut carry).collect()
+    } else {
+        // Elsewhere they share nothing and run in parallel: a tile's split
+        // pixels can be most of a render's work (a silhouette crossing few
+        // tiles), more than one thread should carry.
+        let fresh = |&g: &Rect| {
+            let out = trace_square(fine, &fine_opts, &job, g, TileState::default());
+            (g, downsample(out, job.factor))
+        };
+        wanted.par_iter().map(fresh).collect()
+    };
     for (g, out) in &outs {
         stats.merge(&out.state.stats);
         // Row by row, as the downsampled square's pixels.
