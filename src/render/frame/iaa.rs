@@ -108,7 +108,8 @@ pub(super) fn anti_alias(
     let per: Vec<u32> = level.iter().map(|&l| 1 << (2 * l)).collect();
     aa::merge_split(&mut px, &split, sub.as_ref(), &per, &mut st.stats);
     st.stats.aa_cpu_ms += ms_since(t0);
-    // The tile's cells go with it: a finished tile waits for its row.
+    // The squares' cells go with the pass: a finished tile waits for its
+    // row (a whole-image render holds every tile).
     st.prune = Default::default();
     t.state = st;
 }

@@ -21,7 +21,7 @@ use crate::render::frame::band::{Band, FloatLayers, band};
 use crate::render::frame::subsample::{PixelFacts, SplitJob, TileArea, downsample, trace_split};
 use crate::render::prune::scope::Scope;
 use crate::render::prune::scope::TileState;
-use crate::render::tile::{ShadowHint, TileOut, TileSpec, ms_since, render_tile, render_tile_from};
+use crate::render::tile::{ShadowHint, TileOut, TileSpec, ms_since, render_tile};
 use crate::render::view::camera::{self, RayCamera};
 use crate::render::view::output;
 use crate::render::{MAX_SIZE, RenderError, RenderOptions, RenderOutput, TILE};
@@ -393,9 +393,7 @@ impl<'a> Frame<'a> {
             mean_value: true,
             rays_from_floors: true,
         };
-        // The tile keeps its shadow cells for its sub-samples (dropped
-        // once it is anti-aliased).
-        let mut out = render_tile_from(&self.tr, &self.opts, spec, self.bg, TileState::default());
+        let mut out = render_tile(&self.tr, &self.opts, spec, self.bg);
         st.stats.aa_tests_cpu_ms += tests_ms;
         st.stats.aa_cpu_ms += tests_ms;
         out.state.stats.merge(&st.stats);

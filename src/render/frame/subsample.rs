@@ -152,8 +152,8 @@ pub(super) fn trace_split(
     let outs: Vec<(Rect, TileOut)> = if fine.pruner.enabled && fine.ctx.large {
         // In a scene whose shadow segments run cells' tapes, the squares
         // are traced one after the other, each carrying on with the cells
-        // the one before it built (the tile's base render's first):
-        // neighbouring squares' segments meet the same cells, and each
+        // the one before it built: neighbouring squares' segments meet
+        // the same cells, and each
         // square pruning its own from the whole functions made the
         // sub-samples' shadows 3/4 of an IAA render of 400 spheres (see
         // docs/performance.md). The order is the tile's alone, so the

@@ -133,8 +133,8 @@ pub(crate) fn render_tile(
 }
 
 /// [`render_tile`] carrying on from `st`, and keeping the shadow cells it
-/// built in the output's state: IAA's base tiles hand theirs to their
-/// sub-samples, and each square of sub-samples to the next.
+/// built in the output's state: each of a tile's squares of IAA
+/// sub-samples hands them to the next.
 pub(crate) fn render_tile_from(
     tr: &Scope<'_>,
     opts: &RenderOptions,
