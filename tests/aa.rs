@@ -552,9 +552,9 @@ fn pixels_split_by_shading_alone_take_grid_2_colours() {
 }
 
 /// IAA on a union large enough to prune (60 spheres, shadows on): the
-/// area tests run on pruned tapes and the sub-samples carry their tile's
-/// shadow cells in order, yet 1 and 2 threads give the same bytes, and
-/// no pixel the plain render hit is lost, pruned or not.
+/// area tests run on pruned tapes and the squares of sub-samples carry
+/// shadow cells from one to the next, yet 1 and 2 threads give the same
+/// bytes, and no pixel the plain render hit is lost, pruned or not.
 #[test]
 fn iaa_on_a_pruned_union_is_thread_independent_and_keeps_surface() {
     let mut x = 7u64;
