@@ -3,18 +3,28 @@
 
 use super::classify::*;
 use super::*;
+use crate::render::context::EvalSet;
 use crate::render::enclose::monotone::decreasing_along;
+use crate::render::trace::beam::PRUNE_WINDOW;
 
+#[derive(Copy, Clone)]
 pub(super) struct PixelAreas<'t, 'a> {
+    /// The evaluators of the tests: pruned to the tile's beam over its
+    /// pixels' whole area, and further to each split block's (see
+    /// [`PixelAreas::pruned_below`]), as the beam tracer prunes its blocks.
     pub(super) tr: &'t Scope<'a>,
+    /// The render's scope, whose whole functions the smoothness test reads
+    /// (a pruned tape keeps the root's signs on its region, not whether
+    /// the function has a crease there).
+    pub(super) whole: &'t Scope<'a>,
     /// Every object: a cell's beam tests consider them all.
-    pub(super) all: Vec<u32>,
+    pub(super) all: &'t [u32],
     pub(super) threshold: f64,
     /// The rays through the tile's pixel corners, from which every
     /// cell's corner rays are read (the same bits as
     /// `RayCamera::corners`, from two sums per corner instead of four
     /// interval products: building them was a tenth of the tests).
-    pub(super) corners: RayGrid,
+    pub(super) corners: &'t RayGrid,
 }
 
 /// What a block of pixels knows from the cell it was quartered from.
@@ -71,8 +81,25 @@ impl PixelAreas<'_, '_> {
         }
         // Only an included cell's bracket holds for its quarters' tests.
         let inherited = d.bracket.filter(|br| br.unique);
+        let pruned = self.pruned_below(b, d.floor, st);
+        let local;
+        let areas;
+        let me = match &pruned {
+            Some(set) => {
+                local = self.tr.with_evals(set);
+                areas = PixelAreas {
+                    tr: &local,
+                    whole: self.whole,
+                    all: self.all,
+                    threshold: self.threshold,
+                    corners: self.corners,
+                };
+                &areas
+            }
+            None => self,
+        };
         for q in b.quarters_by_row() {
-            self.block(
+            me.block(
                 c,
                 q,
                 FromParent {
@@ -82,6 +109,29 @@ impl PixelAreas<'_, '_> {
                 st,
             );
         }
+    }
+
+    // The evaluators the quarters of the split block `b` are tested on:
+    // pruned to its beam (whole area) over a window from where its sweep
+    // found its first candidate piece (`floor`), as the beam tracer's
+    // split blocks prune theirs (`beam::PRUNE_WINDOW`), up to the end of
+    // the tile's slice holding it; `None` where nothing was found or
+    // nothing shrinks enough. Tests outside the window run the tile's
+    // evaluators (see `crate::eval::regional`).
+    fn pruned_below(&self, b: Rect, floor: EmptyPrefix, st: &mut TileState) -> Option<EvalSet> {
+        let (ta, tb) = (floor.at, floor.near);
+        if !(ta > 0.0 && tb > ta) {
+            return None;
+        }
+        let tr = self.tr;
+        let corners = self.corners.corners((b.x0, b.y0), (b.x1 + 1, b.y1 + 1));
+        let side = f64::from((b.x1 - b.x0).max(b.y1 - b.y0));
+        let reach = ta + PRUNE_WINDOW * (tb - ta).max(probe::min_width(tr, side, ta));
+        let t1 = far_t(&corners, &bounds_box(&tr.ctx.bounds));
+        let end = tr.slice_end_after(ta).map_or(t1, |e| e.min(t1));
+        let window = Interval::new(ta, end.min(reach).max(tb));
+        let region = tr.ctx.corner_region(&corners, window)?;
+        tr.pruned_to(region, st)
     }
 
     // The beam tests of the block `b` (whole area), inside
@@ -121,13 +171,7 @@ impl PixelAreas<'_, '_> {
         // None when the piece lies wholly outside them.
         let eval_min = |t: Interval, st: &mut TileState| -> Option<proof::SignBound> {
             let hb = box_meet(corners.hull(t), bounds)?;
-            Some(probe::scene_signs(
-                tr,
-                &self.all,
-                hb,
-                SignForm::Tight(0),
-                st,
-            ))
+            Some(probe::scene_signs(tr, self.all, hb, SignForm::Tight(0), st))
         };
         let rejected = |t: Interval| eval_min(t, st).is_none_or(|f| f.positive());
         let near = floor.near_from(t0);
@@ -143,7 +187,7 @@ impl PixelAreas<'_, '_> {
         // strictly decreasing along every ray.
         let mut whole = |t: f64| {
             let hb = corners.hull(Interval::point(t));
-            probe::scene_signs(tr, &self.all, hb, SignForm::Natural, st)
+            probe::scene_signs(tr, self.all, hb, SignForm::Natural, st)
         };
         let Some(tb2) = probe::bracket_end(
             (ta, tb),
@@ -244,7 +288,7 @@ impl PixelAreas<'_, '_> {
         for _ in 0..NARROW_STEPS {
             let m = 0.5 * (a + b);
             let hb = corners.hull(Interval::point(m));
-            let fm = probe::scene_signs(tr, &self.all, hb, SignForm::Natural, st);
+            let fm = probe::scene_signs(tr, self.all, hb, SignForm::Natural, st);
             if fm.positive() {
                 a = m;
             } else if fm.negative() {
@@ -255,13 +299,7 @@ impl PixelAreas<'_, '_> {
         }
         let mut skipped = || {
             let hb = box_meet(corners.hull(Interval::new(front, a)), *bounds)?;
-            Some(probe::scene_signs(
-                tr,
-                &self.all,
-                hb,
-                SignForm::Tight(0),
-                st,
-            ))
+            Some(probe::scene_signs(tr, self.all, hb, SignForm::Tight(0), st))
         };
         if a > front && skipped().is_some_and(|f| !f.positive()) {
             a = front;
@@ -301,7 +339,7 @@ impl PixelAreas<'_, '_> {
     // Whether object k is proven continuously differentiable over `hb`
     // (`ir::prune::smooth_on`), so that no crease crosses the cell.
     pub(super) fn crease_free(&self, k: usize, hb: IBox) -> bool {
-        self.tr.ctx.evals[k]
+        self.whole.ctx.evals[k]
             .function()
             .is_some_and(|f| f.len() <= SMOOTH_TEST_MAX_OPS && smooth_on(f, hb))
     }

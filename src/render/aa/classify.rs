@@ -3,6 +3,7 @@
 
 use super::area::*;
 use super::*;
+use crate::render::context::EvalSet;
 
 /// The IAA results of one tile, row-major within the tile.
 pub(crate) struct TilePixels<'a> {
@@ -207,11 +208,28 @@ pub(crate) fn classify_tile(
         brackets: vec![None; n],
         by_shading: vec![false; n],
     };
+    let all: Vec<u32> = (0..tr.ctx.evals.len() as u32).collect();
+    let corners = RayGrid::of_pixel_corners(&tr.ctx.cam, (x0, y0), (w, h));
+    // The tests run on the functions pruned to the tile's beam over its
+    // pixels' whole area and its slices along the rays, as the tile's
+    // visibility does over its pixel centres (`tile::prune_to_tile`):
+    // on the whole function, a union of 400 spheres spent most of its
+    // IAA render here.
+    let pruned = pruned_to_area(tr, (x0, y0, w, h), &corners, st);
+    let local;
+    let scope = match &pruned {
+        Some((set, ends)) => {
+            local = tr.with_evals(set).with_slice_ends(ends.clone());
+            &local
+        }
+        None => tr,
+    };
     let ctx = PixelAreas {
-        tr,
-        all: (0..tr.ctx.evals.len() as u32).collect(),
+        tr: scope,
+        whole: tr,
+        all: &all,
         threshold,
-        corners: RayGrid::of_pixel_corners(&tr.ctx.cam, (x0, y0), (w, h)),
+        corners: &corners,
     };
     let whole = Rect {
         x0: 0,
@@ -225,6 +243,32 @@ pub(crate) fn classify_tile(
     };
     ctx.block(&mut c, whole, top, st);
     c
+}
+
+// The scene's evaluators pruned to the beam of the tile `(x0, y0, w, h)`
+// over its pixels' whole area (corner to corner, `corners`), from where
+// that beam enters the bounds to `far_t`, with the interior ends of its
+// slices; `None` where nothing prunes. The tests' boxes reach `far_t`,
+// beyond which no block's rays are inside the bounds: clipped to the
+// bounds, the hull of a piece past the beam's exit still overhangs the
+// hull over the slab range, and a box outside the region runs the whole
+// function.
+fn pruned_to_area(
+    tr: &Scope<'_>,
+    (x0, y0, w, h): (u32, u32, u32, u32),
+    corners: &RayGrid,
+    st: &mut TileState,
+) -> Option<(EvalSet, Vec<f64>)> {
+    let xs = (f64::from(x0), f64::from(x0 + w));
+    let ys = (f64::from(y0), f64::from(y0 + h));
+    let slab = tr.ctx.cam.corners(xs, ys).slab_range(&tr.ctx.bounds)?;
+    let far = far_t(
+        &corners.corners((0, 0), (w + 1, h + 1)),
+        &bounds_box(&tr.ctx.bounds),
+    );
+    let t = Interval::new(slab.lo, slab.hi.max(far));
+    let pruned = tr.pruned_to_beam(xs, ys, t, st)?;
+    Some((pruned, tr.slice_ends(xs, ys, t)))
 }
 
 /// The shadow-edge rule over a tile's base samples (`depth`: +inf where the

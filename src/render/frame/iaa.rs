@@ -97,7 +97,7 @@ pub(super) fn anti_alias(
             factor: 1 << l,
             background: bg,
         };
-        let traced = trace_split(fine_tr, job, &mut st.stats);
+        let traced = trace_split(fine_tr, job, &mut st.prune, &mut st.stats);
         let all = sub.get_or_insert_with(|| SplitSamples::none(n));
         for k in (0..n).filter(|&k| these[k]) {
             all.linear[k] = traced.linear[k];
@@ -108,5 +108,8 @@ pub(super) fn anti_alias(
     let per: Vec<u32> = level.iter().map(|&l| 1 << (2 * l)).collect();
     aa::merge_split(&mut px, &split, sub.as_ref(), &per, &mut st.stats);
     st.stats.aa_cpu_ms += ms_since(t0);
+    // The squares' cells go with the pass: a finished tile waits for its
+    // row (a whole-image render holds every tile).
+    st.prune = Default::default();
     t.state = st;
 }

@@ -125,7 +125,23 @@ pub(crate) fn render_tile(
     spec: TileSpec<'_>,
     background: [f64; 3],
 ) -> TileOut {
-    let mut st = TileState::default();
+    let mut out = render_tile_from(tr, opts, spec, background, TileState::default());
+    // The tile's cells go with the tile: a finished tile waits for its
+    // row, and the tapes of its cells are most of its memory.
+    out.state.prune = Default::default();
+    out
+}
+
+/// [`render_tile`] carrying on from `st`, and keeping the shadow cells it
+/// built in the output's state: each of a tile's squares of IAA
+/// sub-samples hands them to the next.
+pub(crate) fn render_tile_from(
+    tr: &Scope<'_>,
+    opts: &RenderOptions,
+    spec: TileSpec<'_>,
+    background: [f64; 3],
+    mut st: TileState,
+) -> TileOut {
     if !spec.mean_value {
         st.mean_value = FormPolicy::never();
         st.affine = FormPolicy::never();
@@ -274,12 +290,7 @@ fn traced_out(
         class: opts
             .want_classify
             .then(|| tile.class.iter().map(|&c| class_color(c)).collect()),
-        // The tile's cells go with the tile: a finished tile waits for
-        // its row, and the tapes of its cells are most of its memory.
-        state: TileState {
-            prune: Default::default(),
-            ..st
-        },
+        state: st,
         classified: None,
     }
 }

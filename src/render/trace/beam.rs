@@ -282,7 +282,7 @@ pub(crate) fn clear_boxes(
 // its first candidate piece: its sub-blocks and rays evaluate mostly there
 // (evaluations outside it use the unpruned functions, see
 // `crate::eval::regional`).
-const PRUNE_WINDOW: f64 = 8.0;
+pub(crate) const PRUNE_WINDOW: f64 = 8.0;
 
 // `split`, with the functions first pruned to the block's beam over
 // `window` (the beam of its pixel centres, whose corner rays are
