@@ -208,9 +208,9 @@ impl Search for RaySearch<'_, '_> {
     }
 }
 
-// Where the scene's enclosure choice asks for them (the policy learns on
-// a ray's pieces as on single-pixel blocks), the affine forms along the
-// ray: drops from `cand` the objects they prove free of surface on the
+// Where the scene's enclosure choice asks for them (`auto`: while the
+// tile's own record for single rays says they pay), the affine forms
+// along the ray: drops from `cand` the objects they prove free of surface on the
 // piece, and returns the hull of the parts where the rest may have
 // theirs (`None`: none left). Where a variable appears many times (an
 // expanded polynomial) the natural interval of a piece stays wide however
@@ -237,12 +237,12 @@ fn affine_narrows(
         };
         if along.is_some() {
             // A win: the object is dropped, or its part is at most half.
-            // The policy counts drops only: a try costs some twenty
-            // interval evaluations, and a clip saves a few bisections
-            // (docs/performance.md).
+            // The policy counts drops only: a try takes the time of some
+            // twenty interval evaluations, and a clip saves a few
+            // bisections (docs/performance.md).
             let win = pb - pa <= 0.5 * (b - a);
             st.stats.affine_wins += u64::from(win);
-            st.affine_along.record(0, pa > pb);
+            st.affine_along.record(0, along == Some(AlongRay::Free));
         }
         lo = lo.min(pa);
         hi = hi.max(pb);
