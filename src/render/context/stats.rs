@@ -129,6 +129,12 @@ counters! {
         affine_tries: u64 => sum,
         /// Affine enclosures that proved a sign the natural form did not.
         affine_wins: u64 => sum,
+        /// Affine forms along a single ray's piece tried (one noise
+        /// symbol, the ray parameter).
+        affine_ray_tries: u64 => sum,
+        /// Those that dropped an object from the piece or clipped it to
+        /// at most half.
+        affine_ray_wins: u64 => sum,
         /// Live ops of the functions that were pruned to a tile, summed over
         /// tiles (see `crate::ir::prune`).
         pruned_ops_before: u64 => sum,
@@ -255,7 +261,7 @@ mod tests {
         };
         let json = st.to_json();
         let obj = json.as_object().unwrap();
-        assert_eq!(obj.len(), 35);
+        assert_eq!(obj.len(), 37);
         assert!(obj.get("aa_samples").is_none());
         assert_eq!(json["aa_samples_mean"], 2.5);
         assert_eq!(json["rays"], 3);

@@ -92,7 +92,7 @@ pub(crate) fn affine_along_ray(
     stats: &mut RenderStats,
 ) -> Option<AlongRay> {
     let tape = tape_for(ctx, k, &bx)?;
-    stats.affine_tries += 1;
+    stats.affine_ray_tries += 1;
     let t = Interval::new(a, b);
     let v = affine_along(tape, ray.o, ray.d, t, bx);
     if proof::holds_no_surface(v.range) {

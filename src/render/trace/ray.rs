@@ -241,7 +241,7 @@ fn affine_narrows(
             // twenty interval evaluations, and a clip saves a few
             // bisections (docs/performance.md).
             let win = pb - pa <= 0.5 * (b - a);
-            st.stats.affine_wins += u64::from(win);
+            st.stats.affine_ray_wins += u64::from(win);
             st.affine_along.record(0, along == Some(AlongRay::Free));
         }
         lo = lo.min(pa);
