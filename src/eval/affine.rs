@@ -81,16 +81,27 @@ pub fn affine_along(
     sides: [Interval; 3],
 ) -> AffineValue<1> {
     SCRATCH_ALONG.with_borrow_mut(|m| {
-        if m.len() < tape.registers() {
-            m.resize(tape.registers(), AffineValue::EMPTY);
-        }
-        let var = |v: usize| AffineValue::along(o[v], d[v], t_range, sides[v]);
-        for &instr in tape.code() {
-            let (out, val) = step(instr, var, |r| m[r as usize]);
-            m[out as usize] = val;
-        }
-        m[root(tape)]
+        run_tape(tape, m, |v| {
+            AffineValue::along(o[v], d[v], t_range, sides[v])
+        })
     })
+}
+
+/// The root's value of `tape` run over the registers `m` (grown to fit),
+/// `var` giving each coordinate's value.
+fn run_tape<const N: usize>(
+    tape: &Tape,
+    m: &mut Vec<AffineValue<N>>,
+    var: impl Fn(usize) -> AffineValue<N>,
+) -> AffineValue<N> {
+    if m.len() < tape.registers() {
+        m.resize(tape.registers(), AffineValue::EMPTY);
+    }
+    for &instr in tape.code() {
+        let (o, v) = step(instr, &var, |r| m[r as usize]);
+        m[o as usize] = v;
+    }
+    m[root(tape)]
 }
 
 impl AffineEvaluator for Interpreter {
@@ -141,16 +152,7 @@ fn root(tape: &Tape) -> usize {
 
 impl AffineEvaluator for Tape {
     fn affine_value(&self, b: [Interval; 3]) -> AffineValue {
-        SCRATCH.with_borrow_mut(|m| {
-            if m.len() < self.registers() {
-                m.resize(self.registers(), AffineValue::EMPTY);
-            }
-            for &instr in self.code() {
-                let (o, v) = step(instr, |v| AffineValue::var(b[v], v), |r| m[r as usize]);
-                m[o as usize] = v;
-            }
-            m[root(self)]
-        })
+        SCRATCH.with_borrow_mut(|m| run_tape(self, m, |v| AffineValue::var(b[v], v)))
     }
 
     fn affine(&self, b: [Interval; 3]) -> Interval {

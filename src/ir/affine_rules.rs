@@ -129,12 +129,14 @@ fn finish<const N: usize>(form: Affine<N>, iv: Interval, ulps: u32) -> AffineVal
     if iv.is_empty() {
         return AffineValue::EMPTY;
     }
-    let plain = AffineValue {
+    // The interval rule alone, as a form of pure error: built only where
+    // the form says nothing (most ops keep their form).
+    let plain = || AffineValue {
         form: Affine::from_interval(iv),
         range: iv,
     };
     if !form.is_bounded() {
-        return plain;
+        return plain();
     }
     // The form's reach is summed once: this runs after every op, and
     // the radius and the range each summed it again (a fifth of an
@@ -146,13 +148,13 @@ fn finish<const N: usize>(form: Affine<N>, iv: Interval, ulps: u32) -> AffineVal
         let by_iv = mx(iv.lo.abs(), iv.hi.abs());
         e = up_sum(e + ulps_of(by_form.min(by_iv), ulps));
         if !e.is_finite() {
-            return plain;
+            return plain();
         }
     }
     let form = Affine { e, ..form };
     match meet(iv, form.range_within(reach)) {
         Some(range) => AffineValue { form, range },
-        None => plain,
+        None => plain(),
     }
 }
 
