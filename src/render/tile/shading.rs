@@ -142,15 +142,13 @@ pub(super) fn shade_pixels(
     let mut linear = vec![background; n];
     let mut shadowed = vec![0u64; n];
     let mut normals = opts.want_normals.then(|| vec![[f64::NAN; 3]; n]);
-    let mut shadow_ms = 0.0;
-    // Reading the clock twice per pixel costs more than shading a pixel
-    // without shadows: only pixels with shadow segments to trace are timed.
-    let any_shadows = tr.ctx.lights.iter().any(|l| l.shadows);
+    // Shadow segments time themselves (`shadow::point_segment_free`):
+    // reading the clock twice a pixel cost more than shading it.
+    let shadow_before = ts.stats.shadow_cpu_ms;
     // Per light, where the last shadowed sample's segment met a solid
     // (see `shadow::point_segment_free`).
     let mut memo = shade::LightMemo::with_blockers(nl);
     for (k, s) in surfs.iter() {
-        let t0 = any_shadows.then(Instant::now);
         let (c, sh) = shade::shade(
             tr,
             s,
@@ -161,15 +159,13 @@ pub(super) fn shade_pixels(
             &mut memo,
             ts,
         );
-        shadow_ms += t0.map_or(0.0, ms_since);
         linear[k] = c.to_array();
         shadowed[k] = sh;
         if let Some(nv) = normals.as_mut() {
             nv[k] = s.n.to_array();
         }
     }
-    // Per-pixel lighting time is dominated by shadow segments.
-    ts.stats.shadow_cpu_ms += shadow_ms;
+    let shadow_ms = ts.stats.shadow_cpu_ms - shadow_before;
     ts.stats.shade_cpu_ms += (ms_since(t_shade) - shadow_ms).max(0.0);
     LitPixels {
         linear,
