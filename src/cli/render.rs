@@ -168,13 +168,20 @@ pub fn run_with(
         e.iter().map(|e| e.compile_time().as_secs_f64() * 1e3).sum()
     };
     let before_view = compiled(&evaluators);
-    args.view.apply(
-        &args.file,
-        &mut scene,
-        &evaluators,
-        (width, height),
-        args.quiet,
-    )?;
+    // Framing runs on as many threads as the render (`--threads`).
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.image.threads.map_or(0, |n| n as usize))
+        .build()
+        .map_err(|e| format!("cannot start worker threads: {e}"))?;
+    pool.install(|| {
+        args.view.apply(
+            &args.file,
+            &mut scene,
+            &evaluators,
+            (width, height),
+            args.quiet,
+        )
+    })?;
     let compile_ms = compile_ms + compiled(&evaluators) - before_view;
 
     let (aa, method) = aa_and_method(args);

@@ -13,6 +13,7 @@
 use std::sync::Arc;
 
 use glam::DVec3;
+use rayon::prelude::*;
 
 use super::camera::normalize;
 use crate::eval::Evaluator;
@@ -85,26 +86,35 @@ fn solid_box_within(
     let mut known = Hull::default();
     let mut kept = Hull::default();
     for d in 0..=depth {
-        // Per family, its undecided cells, in the level's order.
-        let undecided: Vec<Vec<[Interval; 3]>> = level
-            .iter()
-            .map(|fam| fam.undecided(evaluators, split, &mut known))
-            .collect();
+        // Per family, its undecided cells and the solid it shows: families
+        // are independent (a hull is the same whatever order it grows
+        // in), so they run in parallel and the box is the same bits.
+        let (undecided, shown): (Vec<Vec<[Interval; 3]>>, Vec<Hull>) = level
+            .par_iter()
+            .map(|fam| {
+                let mut shown = Hull::default();
+                (fam.undecided(evaluators, split, &mut shown), shown)
+            })
+            .unzip();
+        shown.iter().for_each(|h| known = known.union(h));
         let count: usize = undecided.iter().map(Vec::len).sum();
         let last = d == depth || count * (1 << split.iter().filter(|&&s| s).count()) > max_regions;
-        let mut next = Vec::new();
-        for (fam, mut cells) in level.iter().zip(undecided) {
-            cells.retain(|c| !known.contains_box(c));
-            if last {
-                cells.iter().for_each(|c| kept.add_box(c));
-            } else {
-                fam.split(&cells, split, pruning, &mut next);
-            }
-        }
+        let undecided = undecided
+            .into_iter()
+            .map(|mut cells| {
+                cells.retain(|c| !known.contains_box(c));
+                cells
+            })
+            .collect::<Vec<_>>();
         if last {
+            undecided.iter().flatten().for_each(|c| kept.add_box(c));
             break;
         }
-        level = next;
+        level = level
+            .par_iter()
+            .zip(undecided)
+            .flat_map_iter(|(fam, cells)| fam.split(&cells, split, pruning))
+            .collect();
     }
     let all = kept.union(&known);
     all.min.map(|min| Bounds {
@@ -187,15 +197,9 @@ impl Family {
         [lo, hi, centre]
     }
 
-    // Appends to `next` a family per cell of `cells` (of this family):
-    // its children, with this family's tapes pruned to it.
-    fn split(
-        &self,
-        cells: &[[Interval; 3]],
-        split: [bool; 3],
-        pruning: Pruning,
-        next: &mut Vec<Family>,
-    ) {
+    // A family per cell of `cells` (of this family): its children, with
+    // this family's tapes pruned to it.
+    fn split(&self, cells: &[[Interval; 3]], split: [bool; 3], pruning: Pruning) -> Vec<Family> {
         let mut pruned: Vec<Vec<Option<PrunedTape>>> = self
             .tapes
             .iter()
@@ -206,6 +210,7 @@ impl Family {
                 _ => Vec::new(),
             })
             .collect();
+        let mut next = Vec::with_capacity(cells.len());
         for (k, cell) in cells.iter().enumerate() {
             let tapes = self
                 .tapes
@@ -220,6 +225,7 @@ impl Family {
             subdivide(cell, split, &mut cells);
             next.push(Family { tapes, cells });
         }
+        next
     }
 }
 
@@ -466,10 +472,10 @@ mod tests {
         }];
         let mut shortest = usize::MAX;
         for _ in 0..4 {
-            let mut next = Vec::new();
-            for fam in &level {
-                fam.split(&fam.cells, [true; 3], Pruning::On, &mut next);
-            }
+            let next: Vec<Family> = level
+                .iter()
+                .flat_map(|fam| fam.split(&fam.cells, [true; 3], Pruning::On))
+                .collect();
             for fam in &next {
                 let unpruned = Family {
                     tapes: whole.clone(),
