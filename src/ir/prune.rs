@@ -231,7 +231,7 @@ pub fn prune_to_at_most(f: &Function, b: [Interval; 3], max_live: usize) -> Opti
     if kept > max_live {
         return None;
     }
-    let mut b = Builder::new();
+    let mut b = Builder::with_capacity(kept);
     let mut new_id: Vec<Option<ValueId>> = vec![None; f.ops.len()];
     for (i, op) in f.ops.iter().enumerate() {
         if live[i] && alias[i] == i {

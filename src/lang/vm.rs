@@ -119,8 +119,11 @@ fn word_span((at, s): Word<'_>) -> Range<usize> {
 /// Parses `.vm` text (source number `src`) into a function whose root is
 /// the last op.
 pub fn parse_vm(text: &str, src: usize) -> Result<Function, Diag> {
-    let mut b = Builder::new();
-    let mut ids: HashMap<&str, (ValueId, usize)> = HashMap::new();
+    // A line is about an op: room for them all up front (growing as it
+    // went was a third of parsing prospero).
+    let lines = text.bytes().filter(|&c| c == b'\n').count() + 1;
+    let mut b = Builder::with_capacity(lines);
+    let mut ids: HashMap<&str, (ValueId, usize)> = HashMap::with_capacity(lines);
     let mut last = None;
     let mut base = 0;
     for line in text.split_inclusive('\n') {

@@ -38,7 +38,7 @@ pub fn balance_chains(f: &Function) -> Function {
             }
         }
     }
-    let mut b = Builder::new();
+    let mut b = Builder::with_capacity(f.ops.len());
     let mut map: Vec<ValueId> = Vec::with_capacity(f.ops.len());
     let mut depth = vec![0usize; f.ops.len()];
     for (i, op) in f.ops.iter().enumerate() {

@@ -111,7 +111,7 @@ pub fn simplify_traced(f: &Function) -> Vec<(&'static str, Function)> {
 /// ops), letting `rule` choose the replacement of each op after its
 /// operands were mapped.
 fn rewrite(f: &Function, mut rule: impl FnMut(&mut Builder, Op) -> ValueId) -> Function {
-    let mut b = Builder::new();
+    let mut b = Builder::with_capacity(f.ops.len());
     let mut map: Vec<ValueId> = Vec::with_capacity(f.ops.len());
     for op in &f.ops {
         let op = op.map_operands(|a| map[a.index()]);

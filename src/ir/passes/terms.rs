@@ -33,7 +33,7 @@ pub fn collect_terms(f: &Function) -> Function {
     users_are_sums[f.root.index()] = false;
     let interior =
         |v: ValueId| uses[v.index()] == 1 && users_are_sums[v.index()] && is_sum(f, f.op(v));
-    let mut b = Builder::new();
+    let mut b = Builder::with_capacity(f.ops.len());
     let mut map: Vec<ValueId> = Vec::with_capacity(f.ops.len());
     for (i, op) in f.ops.iter().enumerate() {
         let v = ValueId(i as u32);
