@@ -149,13 +149,10 @@ pub(crate) fn point_segment_free(
     // as its sweep would find with no piece to visit and its hint outside
     // the bounds, without the sweep's setup or reading the clock, which
     // cost a tenth of prospero's default render.
-    let q = point_box(start.to_array());
-    let bounds = bounds_box(&tr.ctx.bounds);
-    let until = reach::inside_until(&q, &segment_delta(&q, end), &bounds);
-    // `pieces_within` keeps no piece either (a NaN keeps none there too).
-    if until < 0.0 || until.is_nan() {
+    if misses_bounds(tr, start, end) {
         return (true, None);
     }
+    let q = point_box(start.to_array());
     let t0 = Instant::now();
     let answer = match blocker {
         Some(s) if hint_blocked(tr, (start + s * end.from(start)).to_array(), st) => {
@@ -165,6 +162,17 @@ pub(crate) fn point_segment_free(
     };
     st.stats.shadow_cpu_ms += t0.elapsed().as_secs_f64() * 1e3;
     answer
+}
+
+/// Whether the segment from `start` to `end` has no point in the bounds,
+/// so no surface: a cut face lit from outside them, every hit of a flat
+/// model under the default light.
+pub(crate) fn misses_bounds(tr: &Scope<'_>, start: DVec3, end: SegEnd) -> bool {
+    let q = point_box(start.to_array());
+    let bounds = bounds_box(&tr.ctx.bounds);
+    let until = reach::inside_until(&q, &segment_delta(&q, end), &bounds);
+    // Where `pieces_within` keeps no piece for the sweep (a NaN keeps none).
+    until < 0.0 || until.is_nan()
 }
 
 // The displacements from the points of `q` to `end`.

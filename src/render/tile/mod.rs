@@ -194,7 +194,7 @@ pub(crate) fn render_tile_from(
     let mut lit = shade_pixels(tr, &surfs, shadows, background, opts, &mut st);
     if let Some(cut) = cut {
         let t_cut = Instant::now();
-        cut.paint(tr, &tile, &mut lit, &mut st);
+        cut.paint(tr, &tile, &known, &mut lit, &mut st);
         st.stats.shade_cpu_ms += ms_since(t_cut);
     }
     traced_out(&spec, opts, &tile, lit, st)

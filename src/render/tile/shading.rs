@@ -64,14 +64,16 @@ pub(super) struct LitPixels {
 
 /// The cut faces of a tile (hits where a ray starts inside a solid, at the
 /// bounds: every hit of a flat scene), lit once per object where every
-/// pixel's ray has the same direction and every light is directional and
-/// casts no shadow. A cut face's normal faces the viewer along the ray
-/// (`shade::surface`), so its colour then depends on the object alone:
-/// the one `shade::shade` gives its first pixel is every pixel's, bit for
-/// bit. Shading each of them was a tenth of prospero's render.
+/// pixel's ray has the same direction and every light is directional. A
+/// cut face's normal faces the viewer along the ray (`shade::surface`), so
+/// where no light's shadow segment from it meets the bounds (no light
+/// casts shadows, or each shines from outside the bounds) its colour
+/// depends on the object alone: the one `shade::shade` gives its first
+/// such pixel is every such pixel's, bit for bit. Shading each of them was
+/// a tenth of prospero's render. The others are shaded one by one.
 pub(super) struct CutFaces {
-    // Per object: the colour and shadow bits of its cut faces, and their
-    // normal, once its first cut face in the tile is shaded.
+    // Per object: the colour and shadow bits of its cut faces lit from
+    // outside the bounds, and their normal, once one of them is shaded.
     pub(super) shaded: Vec<Option<(DVec3, u64, DVec3)>>,
 }
 
@@ -83,7 +85,7 @@ impl CutFaces {
                 .ctx
                 .lights
                 .iter()
-                .all(|l| !l.shadows && matches!(l.kind, LightKind::Directional(_)));
+                .all(|l| matches!(l.kind, LightKind::Directional(_)));
         uniform.then(|| CutFaces {
             shaded: vec![None; tr.ctx.evals.len()],
         })
@@ -94,19 +96,30 @@ impl CutFaces {
         mut self,
         tr: &Scope<'_>,
         tile: &TileRays,
+        known: &[Option<u64>],
         lit: &mut LitPixels,
         st: &mut TileState,
     ) {
+        let memo = &mut shade::LightMemo::with_blockers(tr.ctx.lights.len());
         for (k, h) in tile.hits.iter().enumerate() {
             let Some(h) = h.filter(|h| h.inside) else {
                 continue;
             };
-            let (c, shadowed, n) = *self.shaded[h.obj].get_or_insert_with(|| {
-                let s = shade::surface(tr, &tile.ray(k), &h, &mut st.stats);
-                let memo = &mut shade::LightMemo::default();
-                let (c, shadowed) = shade::shade(tr, &s, KnownShadows::default(), memo, st);
+            let s = shade::surface(tr, &tile.ray(k), &h, &mut st.stats);
+            // A pixel taking a nearby sample's shadows (IAA) takes them.
+            let known = KnownShadows {
+                lit_by_beam: &[],
+                known: known.get(k).copied().flatten(),
+            };
+            let mut shade_one = |st: &mut TileState| {
+                let (c, shadowed) = shade::shade(tr, &s, known, memo, st);
                 (c, shadowed, s.n)
-            });
+            };
+            let (c, shadowed, n) = if known.known.is_none() && lit_from_outside(tr, &s) {
+                *self.shaded[h.obj].get_or_insert_with(|| shade_one(st))
+            } else {
+                shade_one(st)
+            };
             lit.linear[k] = c.to_array();
             lit.shadowed[k] = shadowed;
             if let Some(nv) = lit.normals.as_mut() {
@@ -114,6 +127,15 @@ impl CutFaces {
             }
         }
     }
+}
+
+// Whether no shadow segment of the (cut face) point `s` meets the bounds:
+// every light casting shadows on it shines from outside them.
+fn lit_from_outside(tr: &Scope<'_>, s: &shade::HitSurface) -> bool {
+    tr.ctx.lights.iter().filter(|l| l.shadows).all(|l| {
+        shadow::light_dir(tr, l.kind, s.p)
+            .is_none_or(|(dir, end)| s.n.dot(dir) <= 0.0 || shadow::misses_bounds(tr, s.q, end))
+    })
 }
 
 /// What is known of a tile's shadows before its pixels' segments.
