@@ -240,12 +240,15 @@ impl<'a> Frame<'a> {
         let total = tiles(w, h).len();
         let done = AtomicUsize::new(0);
         let mut output_ms = 0.0;
-        let mut pending: Option<Band> = None;
-        let mut emit = |b: Band| -> Result<f64, E> {
-            let t0 = Instant::now();
-            sink(&b)?;
-            Ok(ms_since(t0))
-        };
+        // The last row of tiles traced, not yet made a band and written.
+        let mut pending: Option<(Vec<TileOut>, u32)> = None;
+        let (opts, float, depth_range) = (&self.opts, self.float, self.depth_range);
+        let mut emit =
+            |(outs, y0): (Vec<TileOut>, u32), stats: &mut RenderStats| -> Result<f64, E> {
+                let t0 = Instant::now();
+                sink(&band(&outs, opts, float, y0, depth_range, stats))?;
+                Ok(ms_since(t0))
+            };
         // IAA's shadow-edge rule reads the base samples just outside a
         // row's tiles (`aa::Beside`), the next row's included: with IAA
         // the base render runs one row ahead (the other modes read none,
@@ -258,8 +261,9 @@ impl<'a> Frame<'a> {
             if self.cancelled() {
                 return Err(RenderError::Cancelled.into());
             }
-            // Encoding the last band overlaps tracing this row: the sink
-            // is serial (one file, top to bottom), the tracing is not.
+            // Making and encoding the last band overlaps tracing this row:
+            // the sink is serial (one file, top to bottom), the tracing is
+            // not.
             let (traced, written) = self.pool.install(|| {
                 rayon::join(
                     || {
@@ -288,7 +292,7 @@ impl<'a> Frame<'a> {
                         self.anti_alias_tiles(&mut outs, beside, &done, total);
                         (outs, next, edges)
                     },
-                    || pending.take().map_or(Ok(0.0), &mut emit),
+                    || pending.take().map_or(Ok(0.0), |p| emit(p, &mut stats)),
                 )
             });
             output_ms += written?;
@@ -296,19 +300,10 @@ impl<'a> Frame<'a> {
             above = edges;
             current = next;
             self.release_groups_above(y0 + TILE);
-            let t0 = Instant::now();
-            pending = Some(band(
-                &outs,
-                &self.opts,
-                self.float,
-                y0,
-                self.depth_range,
-                &mut stats,
-            ));
-            output_ms += ms_since(t0);
+            pending = Some((outs, y0));
         }
-        if let Some(b) = pending {
-            output_ms += emit(b)?;
+        if let Some(p) = pending {
+            output_ms += emit(p, &mut stats)?;
         }
         if self.opts.progress && self.progress.is_none() {
             eprintln!();
