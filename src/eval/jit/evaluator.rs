@@ -90,9 +90,10 @@ impl Inner {
 /// interpreter's rules and bits) answers them. Functions this long are
 /// unions whose work runs on pruned tapes: 100 spheres (1,403 ops) asked
 /// the whole function for 30 derivatives in a 1024² render and waited
-/// 90–200 ms for two derivative kinds to compile; colonnade (795 ops)
-/// asks 2,575 and keeps its native ones.
-pub const DERIVATIVES_MAX_OPS: usize = 1024;
+/// 90–200 ms for two derivative kinds to compile. Colonnade (795 ops)
+/// asks 2,575, which its tape answers in less time than the 120–380 ms its
+/// render waited for them to compile (with the same images).
+pub const DERIVATIVES_MAX_OPS: usize = 512;
 
 /// Calls of one kind (a batch counts each box or point) that the tape
 /// answers in the background mode before that kind starts compiling.
