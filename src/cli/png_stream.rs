@@ -5,6 +5,8 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;
 
+use rayon::prelude::*;
+
 use super::CliError;
 use ibeam::render::Band;
 
@@ -58,23 +60,28 @@ pub fn write_pngs<R>(
         for (w, &(path, _)) in writers.iter_mut().zip(files) {
             streams.push(w.stream_writer().map_err(|e| write_err(path, e))?);
         }
-        let mut scratch = Vec::new();
+        // Each file is a stream of its own: a band's layers encode in
+        // parallel (the tracing workers take them), where one after another
+        // they were most of a row's time wherever tracing is cheap (the
+        // empty rows of a model framed with depth and normals).
         let mut sink = |band: &Band| -> Result<(), CliError> {
-            for (s, &(path, layer)) in streams.iter_mut().zip(files) {
-                let bytes: &[u8] = match layer {
-                    Layer::Color => &band.color,
-                    Layer::Depth => {
-                        scratch.clear();
-                        let d = band.depth.as_deref().unwrap_or_default();
-                        scratch.extend(d.iter().flat_map(|v| v.to_be_bytes()));
-                        &scratch
-                    }
-                    Layer::Normals => band.normals.as_deref().unwrap_or_default(),
-                    Layer::Classify => band.classify.as_deref().unwrap_or_default(),
-                };
-                s.write_all(bytes).map_err(|e| write_err(path, e))?;
-            }
-            Ok(())
+            streams
+                .par_iter_mut()
+                .zip(files)
+                .try_for_each(|(s, &(path, layer))| {
+                    let depth: Vec<u8>;
+                    let bytes: &[u8] = match layer {
+                        Layer::Color => &band.color,
+                        Layer::Depth => {
+                            let d = band.depth.as_deref().unwrap_or_default();
+                            depth = d.iter().flat_map(|v| v.to_be_bytes()).collect();
+                            &depth
+                        }
+                        Layer::Normals => band.normals.as_deref().unwrap_or_default(),
+                        Layer::Classify => band.classify.as_deref().unwrap_or_default(),
+                    };
+                    s.write_all(bytes).map_err(|e| write_err(path, e))
+                })
         };
         let r = body(&mut sink)?;
         for (s, &(path, _)) in streams.into_iter().zip(files) {
