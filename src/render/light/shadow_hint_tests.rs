@@ -95,3 +95,42 @@ fn blocker_hints_never_change_the_answer() {
     );
     assert!(settled_by_hint > 0);
 }
+
+// A segment with no point in the bounds is free without a sweep, as the
+// sweep finds it; segments from outside that cross the bounds, or from
+// inside them, still sweep.
+#[test]
+fn segments_missing_the_bounds_skip_the_sweep() {
+    let scene = floor_and_ball();
+    let evals = build_evaluators(&scene, EvalKind::Interp).expect("evaluators");
+    let cam = RayCamera::new(&scene.camera, 16, 16).expect("camera");
+    let tr = Scope::new(&scene, &evals, cam, false);
+    let mut st = TileState::default();
+    let light = SegEnd::Point(DVec3::new(0.0, 2.0, 0.0));
+    let mut rng = Rng::new(11);
+    let (mut missed, mut crossing) = (0, 0);
+    for _ in 0..400 {
+        let p = DVec3::new(
+            rng.range(-1.5, 1.5),
+            rng.range(-1.5, 1.5),
+            rng.range(-1.5, 1.5),
+        );
+        let free = segment_free(&tr, point_box(p.to_array()), &[p], light, 1e-4, &mut st);
+        let evaluated = st.stats.interval_evals + st.stats.point_evals;
+        let (answer, found) = point_segment_free(&tr, p, light, 1e-4, None, &mut st);
+        assert_eq!(answer, free, "{p:?}");
+        let swept = st.stats.interval_evals + st.stats.point_evals > evaluated;
+        if misses_bounds(&tr, p, light) {
+            missed += 1;
+            assert!(free && found.is_none() && !swept, "{p:?}");
+        } else if p.y < -1.0 && p.x.abs() < 0.5 && p.z.abs() < 0.5 {
+            // From below the bounds up through them (and the floor).
+            crossing += 1;
+            assert!(!free && swept, "{p:?}");
+        }
+    }
+    assert!(
+        missed > 50 && crossing > 0,
+        "{missed} missed, {crossing} crossing"
+    );
+}
