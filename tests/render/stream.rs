@@ -140,8 +140,8 @@ fn a_failing_sink_stops_the_stream() {
 fn a_cancelled_stream_stops_before_its_next_row() {
     let scene = sphere();
     let ev = build_evaluators(&scene, EvalKind::Interp).unwrap();
-    // Four rows of tiles; the first band is handed out while the second
-    // row is traced, so the flag set there stops the stream at the third.
+    // Four rows of tiles: the flag set while the first band is handed out
+    // stops the stream before the next band (or row of tiles).
     let opts = RenderOptions::new(40, 100);
     let cancel = Arc::new(AtomicBool::new(false));
     let frame = Frame::new(&scene, &ev, &opts, Aa::None)

@@ -30,6 +30,11 @@ use crate::scene::Scene;
 mod iaa;
 use iaa::{anti_alias, edges_of};
 
+/// Rows of tiles [`Frame::stream`] traces at once outside IAA: at one, a
+/// worker idled at the end of each row while another finished the row's
+/// slowest tile. Each row held costs about 2 MB at 1024 pixels wide.
+const STRIPE_ROWS: usize = 4;
+
 /// Renders `scene` with one evaluator per object (same order):
 /// `evaluators[i]` evaluates `scene.objects[i].function` (the renderer
 /// reads the functions only to see which of x, y, z they use).
@@ -240,49 +245,53 @@ impl<'a> Frame<'a> {
         let total = tiles(w, h).len();
         let done = AtomicUsize::new(0);
         let mut output_ms = 0.0;
-        // The last row of tiles traced, not yet made a band and written.
-        let mut pending: Option<(Vec<TileOut>, u32)> = None;
+        // The rows of tiles traced, not yet made bands and written.
+        let mut pending: Vec<(Vec<TileOut>, u32)> = Vec::new();
         let (opts, float, depth_range) = (&self.opts, self.float, self.depth_range);
+        let cancelled = || self.cancelled();
         let mut emit =
-            |(outs, y0): (Vec<TileOut>, u32), stats: &mut RenderStats| -> Result<f64, E> {
+            |rows: Vec<(Vec<TileOut>, u32)>, stats: &mut RenderStats| -> Result<f64, E> {
                 let t0 = Instant::now();
-                sink(&band(&outs, opts, float, y0, depth_range, stats))?;
+                for (outs, y0) in rows {
+                    if cancelled() {
+                        return Err(RenderError::Cancelled.into());
+                    }
+                    sink(&band(&outs, opts, float, y0, depth_range, stats))?;
+                }
                 Ok(ms_since(t0))
             };
         // IAA's shadow-edge rule reads the base samples just outside a
         // row's tiles (`aa::Beside`), the next row's included: with IAA
-        // the base render runs one row ahead (the other modes read none,
-        // and hold one row).
+        // the base render runs one row ahead, a row at a time. The other
+        // modes read none, and trace `STRIPE_ROWS` rows of tiles at once:
+        // a worker done with its share of a row takes tiles of the next
+        // instead of waiting for the row's slowest tile.
         let look_ahead = matches!(self.aa, Aa::Iaa { .. });
+        let stripe = if look_ahead { 1 } else { STRIPE_ROWS };
         let rows: Vec<u32> = (0..h).step_by(TILE as usize).collect();
         let mut above: Vec<TileEdges> = Vec::new();
         let mut current = look_ahead.then(|| self.pool.install(|| self.trace(&tile_row(w, h, 0))));
-        for (r, &y0) in rows.iter().enumerate() {
+        for (s, ys) in rows.chunks(stripe).enumerate() {
             if self.cancelled() {
                 return Err(RenderError::Cancelled.into());
             }
-            // Making and encoding the last band overlaps tracing this row:
-            // the sink is serial (one file, top to bottom), the tracing is
-            // not.
+            let (r, y0) = (s * stripe, ys[0]);
+            // Making and encoding the last bands overlaps tracing these
+            // rows: the sink is serial (one file, top to bottom), the
+            // tracing is not.
             let (traced, written) = self.pool.install(|| {
                 rayon::join(
                     || {
+                        if !look_ahead {
+                            return (self.trace_stripe(ys, &done, total), None, Vec::new());
+                        }
                         let mut outs = current
                             .take()
                             .unwrap_or_else(|| self.trace(&tile_row(w, h, y0)));
-                        let next = rows
-                            .get(r + 1)
-                            .filter(|_| look_ahead)
-                            .map(|&y| self.trace(&tile_row(w, h, y)));
-                        let sides = |row: &[TileOut]| -> Vec<TileEdges> {
-                            if look_ahead {
-                                row.iter().map(edges_of).collect()
-                            } else {
-                                Vec::new()
-                            }
-                        };
-                        let edges = sides(&outs);
-                        let below = next.as_deref().map(sides).unwrap_or_default();
+                        let next = rows.get(r + 1).map(|&y| self.trace(&tile_row(w, h, y)));
+                        let edges: Vec<TileEdges> = outs.iter().map(edges_of).collect();
+                        let below: Vec<TileEdges> =
+                            next.iter().flat_map(|n| n.iter().map(edges_of)).collect();
                         let beside = |i: usize| NeighbourTiles {
                             above: above.get(i),
                             below: below.get(i),
@@ -290,27 +299,45 @@ impl<'a> Frame<'a> {
                             right: edges.get(i + 1),
                         };
                         self.anti_alias_tiles(&mut outs, beside, &done, total);
-                        (outs, next, edges)
+                        (vec![(outs, y0)], next, edges)
                     },
-                    || pending.take().map_or(Ok(0.0), |p| emit(p, &mut stats)),
+                    || emit(std::mem::take(&mut pending), &mut stats),
                 )
             });
             output_ms += written?;
             let (outs, next, edges) = traced;
             above = edges;
             current = next;
-            self.release_groups_above(y0 + TILE);
-            pending = Some((outs, y0));
+            self.release_groups_above(ys[ys.len() - 1] + TILE);
+            pending = outs;
         }
-        if let Some(p) = pending {
-            output_ms += emit(p, &mut stats)?;
-        }
+        output_ms += emit(pending, &mut stats)?;
         if self.opts.progress && self.progress.is_none() {
             eprintln!();
         }
         stats.output_ms = output_ms;
         self.finish_times(&mut stats);
         Ok(stats)
+    }
+
+    // The rows of tiles starting at `ys`, traced together, each with its
+    // first image row.
+    fn trace_stripe(
+        &self,
+        ys: &[u32],
+        done: &AtomicUsize,
+        total: usize,
+    ) -> Vec<(Vec<TileOut>, u32)> {
+        let (w, h) = (self.opts.width, self.opts.height);
+        let rows: Vec<_> = ys.iter().map(|&y| tile_row(w, h, y)).collect();
+        let mut outs = self.trace(&rows.concat());
+        self.anti_alias_tiles(&mut outs, |_| NeighbourTiles::default(), done, total);
+        let mut stripe = Vec::with_capacity(ys.len());
+        for (row, &y) in rows.iter().zip(ys).rev() {
+            stripe.push((outs.split_off(outs.len() - row.len()), y));
+        }
+        stripe.reverse();
+        stripe
     }
 
     fn cancelled(&self) -> bool {
