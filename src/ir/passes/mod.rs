@@ -81,30 +81,34 @@ const MAX_ROUNDS: usize = 8;
 /// Runs [`PASSES`] until the function stops changing (at most a few
 /// rounds), then dead-code elimination.
 pub fn simplify(f: &Function) -> Function {
-    simplify_traced(f)
-        .pop()
-        .map(|(_, g)| g)
-        .unwrap_or_else(|| dce(f))
+    run_passes(f, |_, _| {})
 }
 
 /// The function after each pass [`simplify`] runs, in order (the last entry
 /// is the result of `simplify`).
 pub fn simplify_traced(f: &Function) -> Vec<(&'static str, Function)> {
     let mut trace: Vec<(&'static str, Function)> = Vec::new();
+    run_passes(f, |name, g| trace.push((name, g.clone())));
+    trace
+}
+
+// The rounds of [`simplify`], handing each pass's result to `seen` (a
+// render keeps none of them, `ibeam ir` prints them all).
+fn run_passes(f: &Function, mut seen: impl FnMut(&'static str, &Function)) -> Function {
     let mut cur = f.clone();
     for _ in 0..MAX_ROUNDS {
         let before = cur.clone();
         for p in PASSES {
             cur = (p.run)(&cur);
             debug_validate(&cur, p.name);
-            trace.push((p.name, cur.clone()));
+            seen(p.name, &cur);
         }
         if cur == before {
             break;
         }
     }
-    // PASSES ends with DCE, so the last entry is already clean.
-    trace
+    // PASSES ends with DCE, so the result is already clean.
+    cur
 }
 
 /// Rebuilds `f` op by op through a [`Builder`] (which merges identical
