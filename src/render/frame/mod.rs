@@ -32,8 +32,13 @@ use iaa::{anti_alias, edges_of};
 
 /// Rows of tiles [`Frame::stream`] traces at once outside IAA: at one, a
 /// worker idled at the end of each row while another finished the row's
-/// slowest tile. Each row held costs about 2 MB at 1024 pixels wide.
+/// slowest tile. Each row held costs about 2 MB at 1024 pixels wide, so
+/// wider images take fewer (at most [`STRIPE_PIXELS`] pixels across the
+/// rows together, one row at least).
 const STRIPE_ROWS: usize = 4;
+
+/// Image width times rows of tiles that a stripe holds at most.
+const STRIPE_PIXELS: usize = 16384;
 
 /// Renders `scene` with one evaluator per object (same order):
 /// `evaluators[i]` evaluates `scene.objects[i].function` (the renderer
@@ -267,7 +272,11 @@ impl<'a> Frame<'a> {
         // a worker done with its share of a row takes tiles of the next
         // instead of waiting for the row's slowest tile.
         let look_ahead = matches!(self.aa, Aa::Iaa { .. });
-        let stripe = if look_ahead { 1 } else { STRIPE_ROWS };
+        let stripe = if look_ahead {
+            1
+        } else {
+            (STRIPE_PIXELS / w as usize).clamp(1, STRIPE_ROWS)
+        };
         let rows: Vec<u32> = (0..h).step_by(TILE as usize).collect();
         let mut above: Vec<TileEdges> = Vec::new();
         let mut current = look_ahead.then(|| self.pool.install(|| self.trace(&tile_row(w, h, 0))));
