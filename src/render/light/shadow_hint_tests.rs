@@ -56,18 +56,30 @@ fn floor_and_ball() -> Scene {
 // the occluder is where the answer comes from.
 #[test]
 fn blocker_hints_never_change_the_answer() {
+    with_floor_and_ball(blocker_hints_hold);
+}
+
+// Runs `test` on `floor_and_ball`'s scope, a tile state and the segment
+// end of its light.
+fn with_floor_and_ball(test: impl FnOnce(&Scope<'_>, &mut TileState, SegEnd)) {
     let scene = floor_and_ball();
     let evals = build_evaluators(&scene, EvalKind::Interp).expect("evaluators");
     let cam = RayCamera::new(&scene.camera, 16, 16).expect("camera");
     let tr = Scope::new(&scene, &evals, cam, false);
-    let mut st = TileState::default();
-    let light = SegEnd::Point(DVec3::new(0.0, 2.0, 0.0));
+    test(
+        &tr,
+        &mut TileState::default(),
+        SegEnd::Point(DVec3::new(0.0, 2.0, 0.0)),
+    );
+}
+
+fn blocker_hints_hold(tr: &Scope<'_>, st: &mut TileState, light: SegEnd) {
     let mut rng = Rng::new(7);
     let (mut shadowed, mut settled_by_hint) = (0, 0);
     for _ in 0..400 {
         // Points just above the floor, some under the ball.
         let p = DVec3::new(rng.range(-0.9, 0.9), -0.49, rng.range(-0.9, 0.9));
-        let free = segment_free(&tr, point_box(p.to_array()), &[p], light, 1e-4, &mut st);
+        let free = segment_free(tr, point_box(p.to_array()), &[p], light, 1e-4, st);
         shadowed += usize::from(!free);
         for hint in [
             None,
@@ -77,7 +89,7 @@ fn blocker_hints_never_change_the_answer() {
             Some(0.5),
             Some(0.99),
         ] {
-            let (hinted, found) = point_segment_free(&tr, p, light, 1e-4, hint, &mut st);
+            let (hinted, found) = point_segment_free(tr, p, light, 1e-4, hint, st);
             assert_eq!(hinted, free, "{p:?} with hint {hint:?}");
             // A point inside a solid is found only on a shadowed segment.
             assert!(
@@ -101,12 +113,10 @@ fn blocker_hints_never_change_the_answer() {
 // inside them, still sweep.
 #[test]
 fn segments_missing_the_bounds_skip_the_sweep() {
-    let scene = floor_and_ball();
-    let evals = build_evaluators(&scene, EvalKind::Interp).expect("evaluators");
-    let cam = RayCamera::new(&scene.camera, 16, 16).expect("camera");
-    let tr = Scope::new(&scene, &evals, cam, false);
-    let mut st = TileState::default();
-    let light = SegEnd::Point(DVec3::new(0.0, 2.0, 0.0));
+    with_floor_and_ball(missing_segments_skip);
+}
+
+fn missing_segments_skip(tr: &Scope<'_>, st: &mut TileState, light: SegEnd) {
     let mut rng = Rng::new(11);
     let (mut missed, mut crossing) = (0, 0);
     for _ in 0..400 {
@@ -115,12 +125,12 @@ fn segments_missing_the_bounds_skip_the_sweep() {
             rng.range(-1.5, 1.5),
             rng.range(-1.5, 1.5),
         );
-        let free = segment_free(&tr, point_box(p.to_array()), &[p], light, 1e-4, &mut st);
+        let free = segment_free(tr, point_box(p.to_array()), &[p], light, 1e-4, st);
         let evaluated = st.stats.interval_evals + st.stats.point_evals;
-        let (answer, found) = point_segment_free(&tr, p, light, 1e-4, None, &mut st);
+        let (answer, found) = point_segment_free(tr, p, light, 1e-4, None, st);
         assert_eq!(answer, free, "{p:?}");
         let swept = st.stats.interval_evals + st.stats.point_evals > evaluated;
-        if misses_bounds(&tr, p, light) {
+        if misses_bounds(tr, p, light) {
             missed += 1;
             assert!(free && found.is_none() && !swept, "{p:?}");
         } else if p.y < -1.0 && p.x.abs() < 0.5 && p.z.abs() < 0.5 {
