@@ -9,12 +9,12 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use crate::eval::regional::Regional;
-use crate::eval::tape::Tape;
 use crate::eval::{Evaluator, Grad, IntervalGrad};
 use crate::interval::Interval;
 use crate::interval::boxes::IBox;
 use crate::render::Enclosure;
 use crate::render::context::stats::RenderStats;
+use crate::render::enclose::affine::FormTape;
 use crate::render::view::camera::{CornerRays, RayCamera};
 use crate::scene::{Bounds, Light, Scene};
 
@@ -53,9 +53,9 @@ pub(crate) struct Context<'a> {
     /// Which enclosure tightens a block's interval (see
     /// `enclose::mean_value::sign_bound`).
     pub enclosure: Enclosure,
-    /// Each object's whole-function tape for the affine form (empty:
+    /// Each object's whole-function tape for the affine forms (empty:
     /// intervals only; see `enclose::affine`).
-    pub affine_tapes: Arc<[Option<Arc<Tape>>]>,
+    pub affine_tapes: Arc<[Option<FormTape>]>,
     /// The scene's lights.
     pub lights: &'a [Light],
     /// The scene's bounds, outside which there is no surface.
