@@ -380,7 +380,7 @@ pub fn along_parameter(t: Interval, eps: Interval) -> Option<Interval> {
 
 /// An interval's midpoint `m` and an upper bound `r` of its distance to
 /// either end, so that `m + r·[-1, 1]` covers it whatever the rounding.
-pub(crate) fn centre_radius(i: Interval) -> (f64, f64) {
+pub fn centre_radius(i: Interval) -> (f64, f64) {
     let m = i.mid();
     (m, mx(up_sum(i.hi - m), up_sum(m - i.lo)))
 }

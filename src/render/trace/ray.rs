@@ -8,7 +8,6 @@ use super::refine::{refine, sign_change};
 use super::sweep::{Piece, Search, SweepState, Visit, sweep};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, ray_box};
-use crate::render::Hit;
 use crate::render::context::stats::RenderStats;
 use crate::render::enclose::affine::{self, AlongRay};
 use crate::render::enclose::centred::{Centred, Newton, centred, newton};
@@ -17,6 +16,7 @@ use crate::render::enclose::proof;
 use crate::render::prune::scope::Scope;
 use crate::render::prune::scope::TileState;
 use crate::render::view::camera::PixelRay;
+use crate::render::{Enclosure, Hit};
 
 // Caps that keep a pathological function from stalling a render; reaching
 // one counts as a hit at the current piece (never a silent miss).
@@ -225,8 +225,12 @@ fn affine_narrows(
     cand: &mut Vec<u32>,
     st: &mut TileState,
 ) -> Option<Piece> {
+    let choice = tr.ctx.enclosure;
+    if choice == Enclosure::Interval {
+        return (!cand.is_empty()).then_some((a, b));
+    }
     let level = piece_level(b - a, tr.ctx.cam.tolerance(a));
-    if !st.affine_along.along_wanted(tr.ctx.enclosure, level) {
+    if !st.affine_along.along_wanted(choice, level) {
         return (!cand.is_empty()).then_some((a, b));
     }
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -255,14 +259,16 @@ fn affine_narrows(
 }
 
 // The size class of a ray piece `width` wide for the forms' policy: a
-// class per factor of 4 of its width over the depth tolerance `tol`.
+// class per factor of 4 of its width over the depth tolerance `tol`
+// (from the quotient's binary exponent, which is floor(log2) for a
+// normal one: this runs on every piece the intervals leave undecided).
 fn piece_level(width: f64, tol: f64) -> usize {
     let r = width / tol;
-    if r.is_finite() && r > 1.0 {
-        ((r.log2() * 0.5) as usize).min(MV_LEVELS - 1)
-    } else {
-        0
+    if !(r.is_finite() && r > 1.0) {
+        return 0;
     }
+    let log2 = ((r.to_bits() >> 52) & 0x7ff).saturating_sub(1023);
+    ((log2 / 2) as usize).min(MV_LEVELS - 1)
 }
 
 // A narrow piece with 0 ∈ F: refine a sign change if the ends show one,
