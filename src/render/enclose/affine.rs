@@ -100,6 +100,15 @@ fn tape_for<'c>(ctx: &'c Context<'_>, k: usize, b: &IBox) -> Option<&'c Tape> {
     (tape.len() <= AFFINE_MAX_OPS).then_some(tape)
 }
 
+/// Whether `auto` tries the form along a ray on object `k`: its whole
+/// function is a [`polynomial`] short enough for the affine forms.
+pub(crate) fn along_may_pay(ctx: &Context<'_>, k: usize) -> bool {
+    ctx.affine_tapes
+        .get(k)
+        .and_then(Option::as_ref)
+        .is_some_and(|t| t.polynomial)
+}
+
 /// What an object's form along a ray proves over a piece of the ray.
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub(crate) enum AlongRay {
@@ -132,7 +141,7 @@ pub(crate) fn affine_along_ray(
     bx: IBox,
     stats: &mut RenderStats,
 ) -> Option<AlongRay> {
-    if ctx.enclosure == Enclosure::Auto && !ctx.affine_tapes.get(k)?.as_ref()?.polynomial {
+    if ctx.enclosure == Enclosure::Auto && !along_may_pay(ctx, k) {
         return None;
     }
     let tape = tape_for(ctx, k, &bx)?;

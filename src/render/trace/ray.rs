@@ -225,8 +225,16 @@ fn affine_narrows(
     cand: &mut Vec<u32>,
     st: &mut TileState,
 ) -> Option<Piece> {
+    // Under `auto`, a piece none of whose candidates is a polynomial
+    // goes on at once: this runs on every piece the intervals leave
+    // undecided.
     let choice = tr.ctx.enclosure;
-    if choice == Enclosure::Interval {
+    if choice == Enclosure::Interval
+        || (choice == Enclosure::Auto
+            && !cand
+                .iter()
+                .any(|&k| affine::along_may_pay(&tr.ctx, k as usize)))
+    {
         return (!cand.is_empty()).then_some((a, b));
     }
     let level = piece_level(b - a, tr.ctx.cam.tolerance(a));
