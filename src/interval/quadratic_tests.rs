@@ -1,7 +1,4 @@
 use super::*;
-use crate::interval::affine::Affine;
-use crate::ir::BinaryOp;
-use crate::ir::affine_rules::{FormValue, affine_binary, affine_powi};
 
 // Points of [-1, 1] where the containment tests look, the ends included.
 fn eps_points() -> Vec<f64> {
@@ -88,29 +85,9 @@ fn products_and_squares_hold_the_values_of_their_operands() {
     }
 }
 
-// (x − 1)¹⁰ written expanded, run by the IR's rules over the form `x`
-// (whose interval is `range`).
-fn expanded<F: Form>(x: F, range: Interval) -> FormValue<F> {
-    let binom = [
-        1.0, -10.0, 45.0, -120.0, 210.0, -252.0, 210.0, -120.0, 45.0, -10.0, 1.0,
-    ];
-    let x = FormValue { form: x, range };
-    let mut sum = FormValue::constant(0.0);
-    for (k, c) in binom.into_iter().enumerate() {
-        let term = affine_binary(
-            BinaryOp::Mul,
-            &FormValue::constant(c),
-            &affine_powi(&x, k as i32),
-        );
-        sum = affine_binary(BinaryOp::Add, &sum, &term);
-    }
-    sum
-}
-
 #[test]
-fn powers_hold_their_values_and_keep_the_cancellation() {
+fn powers_hold_their_values() {
     let (o, d) = (Interval::point(1.3), Interval::point(1.0));
-    let mut errors = Vec::new();
     for w in [0.01, 0.001] {
         // x = 1.3 + t along the ray, t over [0, w].
         let t = Interval::new(0.0, w);
@@ -126,26 +103,7 @@ fn powers_hold_their_values_and_keep_the_cancellation() {
                 );
             }
         }
-        let range = o.add(t);
-        let sum = expanded(q, range);
-        for (x, eps) in ray_points(t) {
-            let v = o.sub(Interval::point(1.0)).add(x).powi(10);
-            let f = over(&sum.form, eps);
-            assert!(
-                f.lo <= v.hi && v.lo <= f.hi,
-                "at {x:?}: {sum:?} lacks {v:?}"
-            );
-            assert!(sum.range.lo <= v.hi && v.lo <= sum.range.hi);
-        }
-        let first = expanded(Affine::<1>::along(o, d, t), range);
-        errors.push((sum.form.e, first.form.e));
     }
-    // The first-order error falls as w², the second-order one as w³.
-    let [(q1, a1), (q2, a2)] = errors[..] else {
-        unreachable!()
-    };
-    assert!(q1 * 10.0 < a1 && q2 * 100.0 < a2, "{errors:?}");
-    assert!(q2 < q1 * 2e-3 && a2 > a1 * 5e-3, "{errors:?}");
 }
 
 #[test]

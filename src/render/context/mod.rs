@@ -9,12 +9,12 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use crate::eval::regional::Regional;
+use crate::eval::tape::Tape;
 use crate::eval::{Evaluator, Grad, IntervalGrad};
 use crate::interval::Interval;
 use crate::interval::boxes::IBox;
 use crate::render::Enclosure;
 use crate::render::context::stats::RenderStats;
-use crate::render::enclose::affine::FormTape;
 use crate::render::view::camera::{CornerRays, RayCamera};
 use crate::scene::{Bounds, Light, Scene};
 
@@ -35,6 +35,17 @@ pub(crate) struct EvalSet {
     /// Each evaluator again, typed, where it is a region of a tree pruned
     /// from the object's function (what pruning further starts from).
     pub regions: Vec<Option<Arc<Regional>>>,
+}
+
+/// An object's whole-function tape for the affine forms
+/// (`enclose::affine::whole_tapes` builds them).
+#[derive(Clone, Debug)]
+pub(crate) struct FormTape {
+    /// The tape.
+    pub tape: Arc<Tape>,
+    /// Whether it is a polynomial (`enclose::affine::polynomial`): `auto`
+    /// tries the form along a ray on such objects only.
+    pub polynomial: bool,
 }
 
 /// The read-only evaluation context of one render (or of a region of it,

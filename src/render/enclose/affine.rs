@@ -15,8 +15,8 @@ use crate::interval::Interval;
 use crate::interval::affine::along_parameter;
 use crate::interval::boxes::{IBox, box_within};
 use crate::render::Enclosure;
-use crate::render::context::Context;
 use crate::render::context::stats::RenderStats;
+use crate::render::context::{Context, FormTape};
 use crate::render::enclose::proof::{self, SignBound};
 use crate::render::view::camera::PixelRay;
 
@@ -25,16 +25,6 @@ use crate::render::view::camera::PixelRay;
 /// interval rule at every undecided `min` and only costs (an affine
 /// evaluation costs about fifty interval ones, `ibeam bench enclosure`).
 pub(crate) const AFFINE_MAX_OPS: usize = 4096;
-
-/// An object's whole-function tape for the affine forms.
-#[derive(Clone, Debug)]
-pub(crate) struct FormTape {
-    /// The tape.
-    pub tape: Arc<Tape>,
-    /// Whether it is a polynomial ([`polynomial`]): `auto` tries the
-    /// form along a ray on such objects only.
-    pub polynomial: bool,
-}
 
 /// Whole-function tapes for the affine form, one per object (None: too
 /// long, or no function), for `choice`; empty where intervals only.
