@@ -105,7 +105,7 @@ fn grow(b: &mut Builder, rng: &mut Rng, leaves: &[ValueId], depth: u32) -> Value
         1 => b.unary(UnaryOp::Neg, a),
         2 => b.unary(UnaryOp::Sqrt, a),
         3 => b.unary(UnaryOp::Abs, a),
-        4 => b.powi(a, 2),
+        4 => b.powi(a, rng.pick(&[2, 2, 3, 4, 5])),
         k => {
             let c = grow(b, rng, leaves, depth - 1);
             let op = [
@@ -140,6 +140,13 @@ fn tight_at(f: &Function, p: [f64; 3]) -> Tight {
                 _ => None,
             }),
             Op::Powi(a, 2) => get(&a).and_then(tight::square),
+            // Higher powers as repeated products (each enclosing the
+            // exact product of enclosures of the factors).
+            Op::Powi(a, n @ 3..=8) => get(&a).and_then(|a| {
+                (1..n).try_fold(a, |acc, _| {
+                    tight::mul(acc, a).filter(|&(lo, hi)| lo.is_finite() && hi.is_finite())
+                })
+            }),
             Op::Binary(o, a, c) => get(&a).zip(get(&c)).and_then(|(a, c)| match o {
                 BinaryOp::Add => tight::add(a, c),
                 BinaryOp::Sub => tight::sub(a, c),
@@ -228,16 +235,82 @@ fn polynomials_hold_exact_values() {
     );
 }
 
-/// The form along a ray (one noise symbol for the ray parameter, as the
-/// tracer's single rays use it) holds the oracle's and the point
-/// evaluation's values at points of the ray, and the part of the piece
-/// it keeps (`may_reach_zero`) holds every point where f may be 0 or
-/// below: outside it the point values are positive. Returns how many
-/// points the part excluded.
-fn check_along_rays(f: &Function, rng: &mut Rng, what: &str) -> usize {
+/// What a form along a ray gives over a piece: its interval, the part of
+/// the piece where f may be 0 or below, and the form's own values at a
+/// parameter (`None` for a form not checked pointwise).
+struct AlongCheck {
+    range: Interval,
+    part: Option<Interval>,
+    at: Box<dyn Fn(f64) -> Option<Interval>>,
+}
+
+/// The first-order form along the ray `o + d·t`, `t` over `t`.
+fn first_order(
+    tape: &ibeam::eval::tape::Tape,
+    o: [Interval; 3],
+    d: [Interval; 3],
+    t: Interval,
+) -> AlongCheck {
     use ibeam::eval::affine::affine_along;
     use ibeam::interval::affine::along_parameter;
     use ibeam::interval::boxes::ray_box;
+    let v = affine_along(tape, o, d, t, ray_box(o, d, t));
+    let part = v.form.may_reach_zero().and_then(|e| along_parameter(t, e));
+    AlongCheck {
+        range: v.range,
+        part,
+        at: Box::new(|_| None),
+    }
+}
+
+/// The second-order form along the ray, checked pointwise too: its
+/// quadratic at the noise value of each parameter, `(t − m)/r` as
+/// `Affine::along` takes `m` and `r`, by outward intervals, plus or minus
+/// its error, must hold f there.
+fn second_order(
+    tape: &ibeam::eval::tape::Tape,
+    o: [Interval; 3],
+    d: [Interval; 3],
+    t: Interval,
+) -> AlongCheck {
+    use ibeam::eval::affine::quadratic_along;
+    use ibeam::interval::affine::{along_parameter, centre_radius};
+    use ibeam::interval::boxes::ray_box;
+    let v = quadratic_along(tape, o, d, t, ray_box(o, d, t));
+    let part = v.form.may_reach_zero().and_then(|e| along_parameter(t, e));
+    let (m, r) = centre_radius(t);
+    let q = v.form;
+    let at = move |tk: f64| {
+        if !q.e.is_finite() {
+            return None;
+        }
+        let eps = Interval::point(tk)
+            .sub(Interval::point(m))
+            .div(Interval::point(r));
+        let p = Interval::point(q.c[2])
+            .mul(eps)
+            .add(Interval::point(q.c[1]))
+            .mul(eps)
+            .add(Interval::point(q.c[0]));
+        Some(p.add(Interval::new(-q.e, q.e)))
+    };
+    AlongCheck {
+        range: v.range,
+        part,
+        at: Box::new(at),
+    }
+}
+
+/// A form along a ray: [`first_order`] or [`second_order`].
+type AlongForm = fn(&ibeam::eval::tape::Tape, [Interval; 3], [Interval; 3], Interval) -> AlongCheck;
+
+/// A form along a ray (one noise symbol for the ray parameter, as the
+/// tracer's single rays use it; `form` runs it) holds the oracle's and
+/// the point evaluation's values at points of the ray, and the part of
+/// the piece it keeps (`may_reach_zero`) holds every point where f may be
+/// 0 or below: outside it the point values are positive. Returns how many
+/// points the part excluded.
+fn check_along_rays(f: &Function, rng: &mut Rng, what: &str, form: AlongForm) -> usize {
     let tape = TapeEvaluator::of_function(f);
     let mut vals = Vec::new();
     let mut excluded = 0;
@@ -250,18 +323,25 @@ fn check_along_rays(f: &Function, rng: &mut Rng, what: &str) -> usize {
         let d = dm.map(Interval::point);
         let t0 = rng.range(0.0, 3.0);
         let t = Interval::new(t0, t0 + rng.pick(&[1e-6, 0.01, 0.1, 1.0]));
-        let v = affine_along(tape.tape(), o, d, t, ray_box(o, d, t));
-        let part = v.form.may_reach_zero().and_then(|e| along_parameter(t, e));
+        let v = form(tape.tape(), o, d, t);
+        let part = v.part;
         for k in 0..=16 {
             let tk = common::sample(t, f64::from(k) / 16.0);
             // Rays from near the origin box's corners too, well inside it.
             let shift = [0, 1, 2].map(|_| rng.pick(&[-0.9e-9, 0.0, 0.9e-9]));
             let p = [0, 1, 2].map(|i| (om[i] + shift[i]) + dm[i] * tk);
+            let at = (v.at)(tk);
             if let Some((lo, hi)) = tight_at(f, p) {
                 assert!(
                     v.range.lo <= lo && hi <= v.range.hi,
                     "{what} at t = {tk}: {:?} lacks [{lo:e}, {hi:e}]",
                     v.range
+                );
+                // The form at tk holds the exact value, which the
+                // oracle's interval holds too: they meet.
+                assert!(
+                    at.is_none_or(|a| a.lo <= hi && lo <= a.hi),
+                    "{what} at t = {tk}: the form gives {at:?}, f in [{lo:e}, {hi:e}]"
                 );
             }
             run_point(&f.ops, p, &mut vals);
@@ -273,6 +353,10 @@ fn check_along_rays(f: &Function, rng: &mut Rng, what: &str) -> usize {
                 v.range.contains(fp),
                 "{what} at t = {tk}: {:?} lacks {fp:e}",
                 v.range
+            );
+            assert!(
+                at.is_none_or(|a| a.contains(fp)),
+                "{what} at t = {tk}: the form gives {at:?}, lacking {fp:e}"
             );
             if !part.is_some_and(|p| p.contains(tk)) {
                 excluded += 1;
@@ -292,11 +376,37 @@ fn forms_along_rays_hold_values_and_clip_soundly() {
     let mut excluded = 0;
     for seed in 0..300 {
         let f = random_polynomial(&mut rng, 2 + seed % 6);
-        excluded += check_along_rays(&f, &mut rng, &format!("polynomial {seed}"));
+        excluded += check_along_rays(&f, &mut rng, &format!("polynomial {seed}"), first_order);
         let g = random_function(u64::from(seed), 8);
-        check_along_rays(&g, &mut rng, &format!("random function {seed}"));
+        check_along_rays(
+            &g,
+            &mut rng,
+            &format!("random function {seed}"),
+            first_order,
+        );
     }
     // The clip must have had something to do for the test to mean much.
+    assert!(excluded > 1000, "the parts excluded only {excluded} points");
+}
+
+/// As [`forms_along_rays_hold_values_and_clip_soundly`] for the
+/// second-order form (`interval::quadratic`), whose quadratic is checked
+/// at each parameter as well as its range.
+#[test]
+fn second_order_forms_along_rays_hold_values_and_clip_soundly() {
+    let mut rng = Rng::new(43);
+    let mut excluded = 0;
+    for seed in 0..300 {
+        let f = random_polynomial(&mut rng, 2 + seed % 6);
+        excluded += check_along_rays(&f, &mut rng, &format!("polynomial {seed}"), second_order);
+        let g = random_function(u64::from(seed), 8);
+        check_along_rays(
+            &g,
+            &mut rng,
+            &format!("random function {seed}"),
+            second_order,
+        );
+    }
     assert!(excluded > 1000, "the parts excluded only {excluded} points");
 }
 

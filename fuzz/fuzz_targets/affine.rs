@@ -13,7 +13,11 @@
 //! - along the ray through the box's diagonal (one noise symbol for the
 //!   ray parameter, `eval::affine::affine_along`), the form contains f at
 //!   sampled points of the ray, and f is positive wherever the form's
-//!   clip (`may_reach_zero`) leaves a point out.
+//!   clip (`may_reach_zero`) leaves a point out;
+//! - the same for the second-order form along that ray
+//!   (`eval::affine::quadratic_along`), whose quadratic at each sampled
+//!   parameter's noise value (plus or minus its error) contains f there
+//!   too.
 //!
 //! Bytes: 0..8 seed, 8 depth, 9 flags (bit 0: simplify), then boxes (six
 //! bytes each, two a side), at most 8.
@@ -21,11 +25,11 @@
 #![no_main]
 
 use ibeam::eval::Single;
-use ibeam::eval::affine::{AffineEvaluator, affine_along};
+use ibeam::eval::affine::{AffineEvaluator, affine_along, quadratic_along};
 use ibeam::eval::interp::Interpreter;
 use ibeam::eval::tape::Tape;
 use ibeam::interval::Interval;
-use ibeam::interval::affine::along_parameter;
+use ibeam::interval::affine::{along_parameter, centre_radius};
 use ibeam::interval::boxes::ray_box;
 use ibeam::ir::passes;
 use ibeam::ir::random::{Rng, random_function};
@@ -96,6 +100,16 @@ fn check_along(f: &ibeam::ir::Function, tape: &Tape, b: [Interval; 3], rng: &mut
     let t = Interval::new(0.0, 1.0);
     let v = affine_along(tape, o, d, t, ray_box(o, d, t));
     let part = v.form.may_reach_zero().and_then(|e| along_parameter(t, e));
+    let q = quadratic_along(tape, o, d, t, ray_box(o, d, t));
+    let q_part = q.form.may_reach_zero().and_then(|e| along_parameter(t, e));
+    let (m, r) = centre_radius(t);
+    // The quadratic's values at the noise value of tk, by outward intervals.
+    let q_at = |tk: f64| {
+        let eps = Interval::point(tk).sub(Interval::point(m)).div(Interval::point(r));
+        let [c0, c1, c2] = q.form.c.map(Interval::point);
+        let e = q.form.e;
+        c2.mul(eps).add(c1).mul(eps).add(c0).add(Interval::new(-e, e))
+    };
     let mut vals = Vec::new();
     for k in 0..24 {
         let tk = if k < 2 { f64::from(k) } else { rng.range(0.0, 1.0) };
@@ -110,6 +124,16 @@ fn check_along(f: &ibeam::ir::Function, tape: &Tape, b: [Interval; 3], rng: &mut
         assert!(
             part.is_some_and(|p| p.contains(tk)) || fp > 0.0,
             "along {b:?}: t = {tk} clipped out by {part:?} where f = {fp:e} ({ctx})"
+        );
+        assert!(q.range.contains(fp), "quadratic along {b:?} at t = {tk}: {:?} lacks {fp:e} ({ctx})", q.range);
+        assert!(
+            !q.form.e.is_finite() || q_at(tk).contains(fp),
+            "quadratic along {b:?} at t = {tk}: {:?} lacks {fp:e} ({ctx})",
+            q.form
+        );
+        assert!(
+            q_part.is_some_and(|p| p.contains(tk)) || fp > 0.0,
+            "quadratic along {b:?}: t = {tk} clipped out by {q_part:?} where f = {fp:e} ({ctx})"
         );
     }
 }

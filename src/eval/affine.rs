@@ -24,7 +24,10 @@ use crate::eval::tape::{Instr, Reg, Tape, with_workspace};
 use crate::eval::taped::TapeEvaluator;
 use crate::interval::Interval;
 use crate::interval::affine::meet;
-use crate::ir::affine_rules::{AffineValue, affine_binary, affine_powi, affine_unary, run_affine};
+use crate::interval::form::Form;
+use crate::ir::affine_rules::{
+    AffineValue, FormValue, QuadraticValue, affine_binary, affine_powi, affine_unary, run_affine,
+};
 use crate::ir::{BinaryOp, UnaryOp};
 
 /// Evaluates f over boxes with affine forms.
@@ -63,6 +66,8 @@ thread_local! {
     static SCRATCH: RefCell<Vec<AffineValue>> = const { RefCell::new(Vec::new()) };
     // The same for forms along a ray (`affine_along`).
     static SCRATCH_ALONG: RefCell<Vec<AffineValue<1>>> = const { RefCell::new(Vec::new()) };
+    // The same for second-order forms along a ray (`quadratic_along`).
+    static SCRATCH_QUADRATIC: RefCell<Vec<QuadraticValue>> = const { RefCell::new(Vec::new()) };
 }
 
 /// f's affine form along the ray `o + d·t` (origin and direction anywhere
@@ -87,15 +92,37 @@ pub fn affine_along(
     })
 }
 
+/// f's second-order form along the ray `o + d·t` for `t` over `t_range`
+/// (a quadratic in the ray parameter's noise symbol,
+/// [`Quadratic::along`]), on `tape`, as [`affine_along`] takes its
+/// arguments. Three numbers per value where [`affine_along`] has two, and
+/// the products keep their second-order terms: an expanded polynomial's
+/// terms cancel in it as they do in the polynomial.
+///
+/// [`Quadratic::along`]: crate::interval::quadratic::Quadratic::along
+pub fn quadratic_along(
+    tape: &Tape,
+    o: [Interval; 3],
+    d: [Interval; 3],
+    t_range: Interval,
+    sides: [Interval; 3],
+) -> QuadraticValue {
+    SCRATCH_QUADRATIC.with_borrow_mut(|m| {
+        run_tape(tape, m, |v| {
+            QuadraticValue::along(o[v], d[v], t_range, sides[v])
+        })
+    })
+}
+
 /// The root's value of `tape` run over the registers `m` (grown to fit),
 /// `var` giving each coordinate's value.
-fn run_tape<const N: usize>(
+fn run_tape<F: Form>(
     tape: &Tape,
-    m: &mut Vec<AffineValue<N>>,
-    var: impl Fn(usize) -> AffineValue<N>,
-) -> AffineValue<N> {
+    m: &mut Vec<FormValue<F>>,
+    var: impl Fn(usize) -> FormValue<F>,
+) -> FormValue<F> {
     if m.len() < tape.registers() {
-        m.resize(tape.registers(), AffineValue::EMPTY);
+        m.resize(tape.registers(), FormValue::EMPTY);
     }
     for &instr in tape.code() {
         let (o, v) = step(instr, &var, |r| m[r as usize]);
@@ -121,16 +148,16 @@ impl AffineEvaluator for Interpreter {
 /// The value one instruction writes, and its register; `var` gives a
 /// coordinate's value, `read` an operand register's.
 #[inline]
-fn step<const N: usize>(
+fn step<F: Form>(
     instr: Instr,
-    var: impl Fn(usize) -> AffineValue<N>,
-    read: impl Fn(Reg) -> AffineValue<N>,
-) -> (Reg, AffineValue<N>) {
+    var: impl Fn(usize) -> FormValue<F>,
+    read: impl Fn(Reg) -> FormValue<F>,
+) -> (Reg, FormValue<F>) {
     let un = |o: Reg, op: UnaryOp, a: Reg| (o, affine_unary(op, &read(a)));
     let bin = |o: Reg, op: BinaryOp, a: Reg, c: Reg| (o, affine_binary(op, &read(a), &read(c)));
     match instr {
         Instr::Var(o, v) => (o, var(v.index())),
-        Instr::Const(o, c) => (o, AffineValue::constant(c)),
+        Instr::Const(o, c) => (o, FormValue::constant(c)),
         Instr::Add(o, a, c) => bin(o, BinaryOp::Add, a, c),
         Instr::Sub(o, a, c) => bin(o, BinaryOp::Sub, a, c),
         Instr::Mul(o, a, c) => bin(o, BinaryOp::Mul, a, c),

@@ -48,7 +48,7 @@ pub fn rounding(z: f64) -> f64 {
 
 /// An upper bound of the exact `x·y` (any signs).
 #[inline]
-fn mul_up(x: f64, y: f64) -> f64 {
+pub(crate) fn mul_up(x: f64, y: f64) -> f64 {
     up(x * y)
 }
 
@@ -56,7 +56,7 @@ fn mul_up(x: f64, y: f64) -> f64 {
 /// ([`ErrSum::total`]): rounding each partial sum upward made every op a
 /// chain of dependent roundings (most of an affine evaluation's time).
 #[derive(Copy, Clone, Debug, Default)]
-struct ErrSum {
+pub(crate) struct ErrSum {
     sum: f64,
     terms: u32,
 }
@@ -64,14 +64,14 @@ struct ErrSum {
 impl ErrSum {
     /// Adds the non-negative upper bound `v`.
     #[inline]
-    fn add(&mut self, v: f64) {
+    pub(crate) fn add(&mut self, v: f64) {
         self.sum += v;
         self.terms += 1;
     }
 
     /// Returns the rounded result `z` of a `+ - *`, adding its error.
     #[inline]
-    fn rounded(&mut self, z: f64) -> f64 {
+    pub(crate) fn rounded(&mut self, z: f64) -> f64 {
         self.add(rounding(z));
         z
     }
@@ -85,7 +85,7 @@ impl ErrSum {
     /// one times `1 + n·2⁻⁵²` (for n far below 2⁵¹), a product [`up`]
     /// rounds upward. NaN and +inf stay.
     #[inline]
-    fn total(&self) -> f64 {
+    pub(crate) fn total(&self) -> f64 {
         // One term is its own exact sum.
         if self.terms <= 1 {
             return self.sum;
@@ -380,7 +380,7 @@ pub fn along_parameter(t: Interval, eps: Interval) -> Option<Interval> {
 
 /// An interval's midpoint `m` and an upper bound `r` of its distance to
 /// either end, so that `m + r·[-1, 1]` covers it whatever the rounding.
-fn centre_radius(i: Interval) -> (f64, f64) {
+pub fn centre_radius(i: Interval) -> (f64, f64) {
     let m = i.mid();
     (m, mx(up_sum(i.hi - m), up_sum(m - i.lo)))
 }

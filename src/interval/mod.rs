@@ -534,6 +534,8 @@ pub mod affine;
 pub mod boxes;
 mod elementary;
 pub mod exp;
+pub mod form;
+pub mod quadratic;
 mod steps;
 mod transcendental;
 pub use steps::{rem_euclid, sign};

@@ -32,6 +32,14 @@
 //!   holding 0, a domain edge inside the range) takes the interval rule
 //!   and turns it into a form of pure error.
 //!
+//! # Forms
+//! The rules are written once for any [`Form`]: the first-order
+//! [`Affine`] forms (over a box, or along a ray) and the second-order
+//! [`Quadratic`] form along a ray. They differ in one rule: a power
+//! `n ≥ 3` of a form that offers [`Form::power`] (the quadratic) is taken
+//! by products, which keep each step's second-order terms, where a
+//! first-order form takes the Chebyshev linearisation below.
+//!
 //! # Undefined and partly defined results
 //! The interval carried is always the interval rule's result over the
 //! operands' intervals, intersected with the form's range. So an op is
@@ -55,30 +63,57 @@
 use super::semantics::{interval_binary, interval_unary};
 use super::{BinaryOp, Op, UnaryOp};
 use crate::interval::affine::{Affine, meet, ulps_of};
+use crate::interval::form::Form;
+use crate::interval::quadratic::Quadratic;
 use crate::interval::{Interval, mx, up_sum};
 
-/// A reduced affine form and an interval of the same values (see the
-/// module doc); EMPTY where the interval is.
+/// A form and an interval of the same values (see the module doc);
+/// EMPTY where the interval is.
 #[derive(Copy, Clone, Debug, PartialEq)]
-pub struct AffineValue<const N: usize = 3> {
-    /// The affine form.
-    pub form: Affine<N>,
+pub struct FormValue<F> {
+    /// The form.
+    pub form: F,
     /// The interval, intersected with the form's range.
     pub range: Interval,
 }
+
+/// A reduced affine form in `N` noise symbols and its interval.
+pub type AffineValue<const N: usize = 3> = FormValue<Affine<N>>;
+
+/// A second-order form along a ray and its interval.
+pub type QuadraticValue = FormValue<Quadratic>;
 
 /// Ulps by which a transcendental's form is widened for its point op:
 /// libm (and `interval::exp::exp`) is within 1 ulp of the real value,
 /// and the rest covers the magnitude bound's own rounding.
 pub const TRANSCENDENTAL_SLACK: u32 = 4;
 
-impl<const N: usize> AffineValue<N> {
+impl<F: Form> FormValue<F> {
     /// The empty set.
-    pub const EMPTY: AffineValue<N> = AffineValue {
-        form: Affine::UNBOUNDED,
+    pub const EMPTY: FormValue<F> = FormValue {
+        form: F::UNBOUNDED,
         range: Interval::EMPTY,
     };
 
+    /// The constant `c` (EMPTY for NaN, as its interval).
+    pub fn constant(c: f64) -> FormValue<F> {
+        let range = Interval::point(c);
+        if range.is_empty() {
+            return FormValue::EMPTY;
+        }
+        FormValue {
+            form: F::constant(c),
+            range,
+        }
+    }
+
+    /// Whether it is EMPTY.
+    pub fn is_empty(&self) -> bool {
+        self.range.is_empty()
+    }
+}
+
+impl<const N: usize> AffineValue<N> {
     /// Coordinate `axis` over the box side `side`.
     pub fn var(side: Interval, axis: usize) -> AffineValue<N> {
         if side.is_empty() {
@@ -88,23 +123,6 @@ impl<const N: usize> AffineValue<N> {
             form: Affine::var(side, axis),
             range: side,
         }
-    }
-
-    /// The constant `c` (EMPTY for NaN, as its interval).
-    pub fn constant(c: f64) -> AffineValue<N> {
-        let range = Interval::point(c);
-        if range.is_empty() {
-            return AffineValue::EMPTY;
-        }
-        AffineValue {
-            form: Affine::constant(c),
-            range,
-        }
-    }
-
-    /// Whether it is EMPTY.
-    pub fn is_empty(&self) -> bool {
-        self.range.is_empty()
     }
 }
 
@@ -122,17 +140,31 @@ impl AffineValue<1> {
     }
 }
 
+impl QuadraticValue {
+    /// Coordinate `o + d·t` of a ray over the parameter range `t`, whose
+    /// interval is `side` (see [`Quadratic::along`]).
+    pub fn along(o: Interval, d: Interval, t: Interval, side: Interval) -> QuadraticValue {
+        if side.is_empty() {
+            return QuadraticValue::EMPTY;
+        }
+        FormValue {
+            form: Quadratic::along(o, d, t),
+            range: side,
+        }
+    }
+}
+
 /// The result of an op whose interval rule gives `iv` and whose affine
 /// rule gives `form`, before the point op's rounding of `ulps` ulps:
 /// see the module doc.
-fn finish<const N: usize>(form: Affine<N>, iv: Interval, ulps: u32) -> AffineValue<N> {
+fn finish<F: Form>(form: F, iv: Interval, ulps: u32) -> FormValue<F> {
     if iv.is_empty() {
-        return AffineValue::EMPTY;
+        return FormValue::EMPTY;
     }
     // The interval rule alone, as a form of pure error: built only where
     // the form says nothing (most ops keep their form).
-    let plain = || AffineValue {
-        form: Affine::from_interval(iv),
+    let plain = || FormValue {
+        form: F::from_interval(iv),
         range: iv,
     };
     if !form.is_bounded() {
@@ -141,33 +173,33 @@ fn finish<const N: usize>(form: Affine<N>, iv: Interval, ulps: u32) -> AffineVal
     // The form's reach is summed once: this runs after every op, and
     // the radius and the range each summed it again (a fifth of an
     // affine evaluation's time).
-    let reach = form.reach();
-    let mut e = form.e;
+    let reach = form.spread();
+    let mut e = form.error();
     if ulps > 0 {
-        let by_form = up_sum(form.c.abs() + up_sum(reach + e));
+        let by_form = up_sum(form.centre().abs() + up_sum(reach + e));
         let by_iv = mx(iv.lo.abs(), iv.hi.abs());
         e = up_sum(e + ulps_of(by_form.min(by_iv), ulps));
         if !e.is_finite() {
             return plain();
         }
     }
-    let form = Affine { e, ..form };
+    let form = form.with_error(e);
     match meet(iv, form.range_within(reach)) {
-        Some(range) => AffineValue { form, range },
+        Some(range) => FormValue { form, range },
         None => plain(),
     }
 }
 
 /// The interval rule alone, as a form of pure error.
-fn fallback<const N: usize>() -> (Affine<N>, u32) {
-    (Affine::UNBOUNDED, 0)
+fn fallback<F: Form>() -> (F, u32) {
+    (F::UNBOUNDED, 0)
 }
 
 /// Affine rule of a one-operand op.
-pub fn affine_unary<const N: usize>(op: UnaryOp, a: &AffineValue<N>) -> AffineValue<N> {
+pub fn affine_unary<F: Form>(op: UnaryOp, a: &FormValue<F>) -> FormValue<F> {
     let iv = interval_unary(op, a.range);
     if iv.is_empty() {
-        return AffineValue::EMPTY;
+        return FormValue::EMPTY;
     }
     let r = a.range;
     let t = TRANSCENDENTAL_SLACK;
@@ -215,14 +247,10 @@ fn derivative(op: UnaryOp, i: Interval) -> Interval {
 }
 
 /// Affine rule of a two-operand op.
-pub fn affine_binary<const N: usize>(
-    op: BinaryOp,
-    a: &AffineValue<N>,
-    b: &AffineValue<N>,
-) -> AffineValue<N> {
+pub fn affine_binary<F: Form>(op: BinaryOp, a: &FormValue<F>, b: &FormValue<F>) -> FormValue<F> {
     let iv = interval_binary(op, a.range, b.range);
     if iv.is_empty() {
-        return AffineValue::EMPTY;
+        return FormValue::EMPTY;
     }
     let (ra, rb) = (a.range, b.range);
     let (form, ulps) = match op {
@@ -241,17 +269,24 @@ pub fn affine_binary<const N: usize>(
 }
 
 /// Affine rule of `powi(a, n)`.
-pub fn affine_powi<const N: usize>(a: &AffineValue<N>, n: i32) -> AffineValue<N> {
+pub fn affine_powi<F: Form>(a: &FormValue<F>, n: i32) -> FormValue<F> {
     let iv = a.range.powi(n);
     if iv.is_empty() {
-        return AffineValue::EMPTY;
+        return FormValue::EMPTY;
+    }
+    // A form that keeps a power's higher terms by products takes them.
+    if n >= 3
+        && let Some(p) = a.form.power(n)
+    {
+        let ulps = 2 * (32 - n.unsigned_abs().leading_zeros()) + 1;
+        return finish(p, iv, ulps);
     }
     let r = a.range;
     // The point rule's products (binary powering) and its division.
     let ulps = 2 * (32 - n.unsigned_abs().leading_zeros()) + 1;
     let odd = n % 2 != 0;
     let (form, ulps) = match n {
-        0 => (Affine::constant(1.0), 0),
+        0 => (F::constant(1.0), 0),
         1 => (a.form, 0),
         2 => (a.form.square(), 1),
         // Its derivative's exponent n - 1 would overflow.
@@ -359,15 +394,15 @@ const RECIP: Shape = Shape {
 /// convex function lies above each tangent: `f(u) - f'(u)·u + (f'(u) -
 /// α)·t` over the range. A concave `f` swaps the two bounds. Any `α` and
 /// `u` give a sound bound; these give about the tightest.
-fn chebyshev<const N: usize>(a: &AffineValue<N>, s: &Shape) -> Affine<N> {
+fn chebyshev<F: Form>(a: &FormValue<F>, s: &Shape) -> F {
     let r = a.range;
     if !(r.lo.is_finite() && r.hi.is_finite()) {
-        return Affine::UNBOUNDED;
+        return F::UNBOUNDED;
     }
     let (pl, ph) = (Interval::point(r.lo), Interval::point(r.hi));
     let (fl, fh) = ((s.f)(pl), (s.f)(ph));
     if fl.is_empty() || fh.is_empty() {
-        return Affine::UNBOUNDED;
+        return F::UNBOUNDED;
     }
     let alpha = if r.hi > r.lo {
         (fh.mid() - fl.mid()) / (r.hi - r.lo)
@@ -375,7 +410,7 @@ fn chebyshev<const N: usize>(a: &AffineValue<N>, s: &Shape) -> Affine<N> {
         0.0
     };
     if !alpha.is_finite() {
-        return Affine::UNBOUNDED;
+        return F::UNBOUNDED;
     }
     let g_at = |p: Interval, fp: Interval| fp.sub(p.mul_point(alpha));
     let ends = g_at(pl, fl).hull(g_at(ph, fh));
@@ -402,19 +437,19 @@ fn chebyshev<const N: usize>(a: &AffineValue<N>, s: &Shape) -> Affine<N> {
 /// midpoint `m`: `f(t) - α·t = f(m) - α·m + (f'(ξ) - α)·(t - m)` for some
 /// ξ in `I`, bounded with the derivative's interval `D` over `I`; `α` is
 /// the midpoint of `D`.
-fn mean_value<const N: usize>(
-    a: &AffineValue<N>,
+fn mean_value<F: Form>(
+    a: &FormValue<F>,
     f: impl Fn(Interval) -> Interval,
     df: impl Fn(Interval) -> Interval,
-) -> Affine<N> {
+) -> F {
     let r = a.range;
     if !(r.lo.is_finite() && r.hi.is_finite()) {
-        return Affine::UNBOUNDED;
+        return F::UNBOUNDED;
     }
     let d = df(r);
     let alpha = d.mid();
     if !(d.lo.is_finite() && d.hi.is_finite() && alpha.is_finite()) {
-        return Affine::UNBOUNDED;
+        return F::UNBOUNDED;
     }
     let pm = Interval::point(r.mid());
     let g = f(pm)
@@ -425,9 +460,9 @@ fn mean_value<const N: usize>(
 
 /// `α·a + β ± δ` for `f(a) - α·a` in `g`: `β` its midpoint, `δ` an upper
 /// bound of its radius (UNBOUNDED when `g` is not a finite interval).
-fn linear_from<const N: usize>(a: &AffineValue<N>, alpha: f64, g: Interval) -> Affine<N> {
+fn linear_from<F: Form>(a: &FormValue<F>, alpha: f64, g: Interval) -> F {
     if !(g.lo.is_finite() && g.hi.is_finite() && g.lo <= g.hi) {
-        return Affine::UNBOUNDED;
+        return F::UNBOUNDED;
     }
     let beta = g.mid();
     let delta = mx(up_sum(g.hi - beta), up_sum(beta - g.lo));
@@ -447,5 +482,51 @@ pub fn run_affine(ops: &[Op], b: [Interval; 3], vals: &mut Vec<AffineValue>) {
             Op::Powi(a, n) => affine_powi(&vals[a.index()], n),
         };
         vals.push(v);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    // (x − 1)¹⁰ written expanded, run by the rules over the form `x`
+    // (whose interval is `range`).
+    fn expanded<F: Form>(x: F, range: Interval) -> FormValue<F> {
+        let binom = [
+            1.0, -10.0, 45.0, -120.0, 210.0, -252.0, 210.0, -120.0, 45.0, -10.0, 1.0,
+        ];
+        let x = FormValue { form: x, range };
+        let mut sum = FormValue::constant(0.0);
+        for (k, c) in binom.into_iter().enumerate() {
+            let term = affine_powi(&x, k as i32);
+            let term = affine_binary(BinaryOp::Mul, &FormValue::constant(c), &term);
+            sum = affine_binary(BinaryOp::Add, &sum, &term);
+        }
+        sum
+    }
+
+    #[test]
+    fn second_order_forms_keep_the_expansions_cancellation() {
+        // x = 1.3 + t along a ray, t over [0, w]: the expansion is
+        // (0.3 + t)¹⁰, and each form holds it at the ends.
+        let (o, d) = (Interval::point(1.3), Interval::point(1.0));
+        let mut errors = Vec::new();
+        for w in [0.01, 0.001] {
+            let t = Interval::new(0.0, w);
+            let range = o.add(t);
+            let second = expanded(Quadratic::along(o, d, t), range);
+            let first = expanded(Affine::<1>::along(o, d, t), range);
+            for end in [0.3f64, 0.3 + w] {
+                let v = end.powi(10);
+                assert!(second.range.contains(v) && first.range.contains(v));
+            }
+            errors.push((second.form.e, first.form.e));
+        }
+        // The first-order error falls as w², the second-order one as w³.
+        let [(q1, a1), (q2, a2)] = errors[..] else {
+            unreachable!()
+        };
+        assert!(q1 * 10.0 < a1 && q2 * 100.0 < a2, "{errors:?}");
+        assert!(q2 < q1 * 2e-3 && a2 > a1 * 5e-3, "{errors:?}");
     }
 }

@@ -37,6 +37,17 @@ pub(crate) struct EvalSet {
     pub regions: Vec<Option<Arc<Regional>>>,
 }
 
+/// An object's whole-function tape for the affine forms
+/// (`enclose::affine::whole_tapes` builds them).
+#[derive(Clone, Debug)]
+pub(crate) struct FormTape {
+    /// The tape.
+    pub tape: Arc<Tape>,
+    /// Whether it is a polynomial (`enclose::affine::polynomial`): `auto`
+    /// tries the form along a ray on such objects only.
+    pub polynomial: bool,
+}
+
 /// The read-only evaluation context of one render (or of a region of it,
 /// with pruned evaluators): the scene's constants, the current evaluator
 /// set, and the counted evaluation calls.
@@ -53,9 +64,9 @@ pub(crate) struct Context<'a> {
     /// Which enclosure tightens a block's interval (see
     /// `enclose::mean_value::sign_bound`).
     pub enclosure: Enclosure,
-    /// Each object's whole-function tape for the affine form (empty:
+    /// Each object's whole-function tape for the affine forms (empty:
     /// intervals only; see `enclose::affine`).
-    pub affine_tapes: Arc<[Option<Arc<Tape>>]>,
+    pub affine_tapes: Arc<[Option<FormTape>]>,
     /// The scene's lights.
     pub lights: &'a [Light],
     /// The scene's bounds, outside which there is no surface.

@@ -2,18 +2,21 @@
 //! straddles 0: reduced affine arithmetic (`eval::affine`) on the tape
 //! that answers for the block's region, which overestimates far less than
 //! intervals where a variable appears many times (quartics and sextics
-//! with many nodes, expanded polynomials).
+//! with many nodes, expanded polynomials). Along a single ray's piece, the
+//! second-order form in the ray parameter (`interval::quadratic`), which
+//! also keeps the cancellation of an expanded polynomial's terms.
 
 use std::sync::Arc;
 
-use crate::eval::affine::{AffineEvaluator, affine_along};
+use crate::eval::affine::{AffineEvaluator, quadratic_along};
+use crate::eval::tape::Instr;
 use crate::eval::tape::Tape;
 use crate::interval::Interval;
 use crate::interval::affine::along_parameter;
 use crate::interval::boxes::{IBox, box_within};
 use crate::render::Enclosure;
-use crate::render::context::Context;
 use crate::render::context::stats::RenderStats;
+use crate::render::context::{Context, FormTape};
 use crate::render::enclose::proof::{self, SignBound};
 use crate::render::view::camera::PixelRay;
 
@@ -25,7 +28,7 @@ pub(crate) const AFFINE_MAX_OPS: usize = 4096;
 
 /// Whole-function tapes for the affine form, one per object (None: too
 /// long, or no function), for `choice`; empty where intervals only.
-pub(crate) fn whole_tapes(ctx: &Context<'_>, choice: Enclosure) -> Arc<[Option<Arc<Tape>>]> {
+pub(crate) fn whole_tapes(ctx: &Context<'_>, choice: Enclosure) -> Arc<[Option<FormTape>]> {
     if choice == Enclosure::Interval {
         return Arc::new([]);
     }
@@ -33,9 +36,30 @@ pub(crate) fn whole_tapes(ctx: &Context<'_>, choice: Enclosure) -> Arc<[Option<A
         .iter()
         .map(|e| {
             let f = e.function()?;
-            (f.live_count() <= AFFINE_MAX_OPS).then(|| Arc::new(Tape::new(f)))
+            (f.live_count() <= AFFINE_MAX_OPS).then(|| {
+                let tape = Arc::new(Tape::new(f));
+                let polynomial = polynomial(&tape);
+                FormTape { tape, polynomial }
+            })
         })
         .collect()
+}
+
+/// Whether every op of `tape` is a polynomial's (`+ - ·`, negation,
+/// squares, whole powers) or a `min`/`max` of them. The second-order
+/// form keeps these ops' cancellation, for a few hundred instructions
+/// an op; every other op takes a linearisation or the interval rule,
+/// which cost more (up to several thousand instructions for a
+/// transcendental) and keep less: on the examples with such ops
+/// (`shapes`: trigonometry and `mod`) its tries cost up to fifty
+/// interval evaluations each and their drops saved less than that.
+pub(crate) fn polynomial(tape: &Tape) -> bool {
+    tape.code().iter().all(|i| {
+        !matches!(
+            i,
+            Instr::Sqrt(..) | Instr::Unary(..) | Instr::Binary(..) | Instr::Powi(_, _, i32::MIN..0)
+        )
+    })
 }
 
 /// The signs object `k`'s affine form proves over `b`, on [`tape_for`]'s
@@ -61,9 +85,18 @@ fn tape_for<'c>(ctx: &'c Context<'_>, k: usize, b: &IBox) -> Option<&'c Tape> {
     // there): a box reaching out of it takes the whole function's.
     let tape: &Tape = match ctx.region_of(k) {
         Some(r) if box_within(b, &r.region()) => r.smallest_holding(b).pruned_tape(),
-        _ => ctx.affine_tapes.get(k)?.as_deref()?,
+        _ => &ctx.affine_tapes.get(k)?.as_ref()?.tape,
     };
     (tape.len() <= AFFINE_MAX_OPS).then_some(tape)
+}
+
+/// Whether `auto` tries the form along a ray on object `k`: its whole
+/// function is a [`polynomial`] short enough for the affine forms.
+pub(crate) fn along_may_pay(ctx: &Context<'_>, k: usize) -> bool {
+    ctx.affine_tapes
+        .get(k)
+        .and_then(Option::as_ref)
+        .is_some_and(|t| t.polynomial)
 }
 
 /// What an object's form along a ray proves over a piece of the ray.
@@ -76,13 +109,20 @@ pub(crate) enum AlongRay {
     Within(f64, f64),
 }
 
-/// Object `k`'s affine form along `ray` over the piece `(a, b)`, whose box
-/// is `bx`, in the ray parameter's one noise symbol
-/// ([`eval::affine::affine_along`]): where the form's linear part stays
-/// above its error, f is positive, so the piece shrinks to where it does
-/// not. `None` where no tape pays (as [`affine_signs`]).
+/// Object `k`'s second-order form along `ray` over the piece `(a, b)`,
+/// whose box is `bx`, a quadratic in the ray parameter's one noise
+/// symbol ([`eval::affine::quadratic_along`]): where the quadratic stays
+/// above its error, f is positive, so the piece shrinks to the hull of
+/// where it does not. `None` where no tape pays (as [`affine_signs`]),
+/// and under `auto` for an object that is not a [`polynomial`].
 ///
-/// [`eval::affine::affine_along`]: crate::eval::affine::affine_along
+/// It replaced the first-order form along rays (`Affine<1>`): on the
+/// expanded polynomial each power's Chebyshev remainder added to the
+/// error, and the first-order form clipped only pieces about 0.003 wide;
+/// a try of the second-order one costs about a third more and drops
+/// pieces 30 times as wide (TM2_REPORT.md).
+///
+/// [`eval::affine::quadratic_along`]: crate::eval::affine::quadratic_along
 pub(crate) fn affine_along_ray(
     ctx: &Context<'_>,
     k: usize,
@@ -91,10 +131,13 @@ pub(crate) fn affine_along_ray(
     bx: IBox,
     stats: &mut RenderStats,
 ) -> Option<AlongRay> {
+    if ctx.enclosure == Enclosure::Auto && !along_may_pay(ctx, k) {
+        return None;
+    }
     let tape = tape_for(ctx, k, &bx)?;
     stats.affine_ray_tries += 1;
     let t = Interval::new(a, b);
-    let v = affine_along(tape, ray.o, ray.d, t, bx);
+    let v = quadratic_along(tape, ray.o, ray.d, t, bx);
     if proof::holds_no_surface(v.range) {
         return Some(AlongRay::Free);
     }

@@ -27,6 +27,15 @@ const AFFINE_MIN_TRIES: u64 = 2;
 /// were cheaper on every example: `docs/performance.md`).
 const AFFINE_WIN_RATIO: u64 = 2;
 
+/// The share of its tries (numerator, denominator) that the form along
+/// a ray must win at a piece size to stay in use there. A try of the
+/// second-order form costs about ten interval evaluations; a piece it
+/// drops saves the interval evaluations of the piece's bisection, which
+/// on the examples came to less than that wherever under three tries in
+/// four dropped theirs, and to far more on the expanded polynomial, where
+/// nineteen in twenty do (TM2_REPORT.md).
+const ALONG_WIN_SHARE: (u64, u64) = (3, 4);
+
 /// Whether a form still pays in one tile, per block size.
 ///
 /// Where the form seldom decides anything (min/max-heavy functions, whose
@@ -72,6 +81,22 @@ impl FormPolicy {
             Enclosure::Interval => false,
             Enclosure::Affine => true,
             Enclosure::Auto => self.pays_affine(level),
+        }
+    }
+
+    /// Whether a ray piece of class `level` tries the form along the ray
+    /// under the scene's `choice` (`auto`: while at least
+    /// [`ALONG_WIN_SHARE`] of its tries at that class won, judged after
+    /// [`AFFINE_MIN_TRIES`]).
+    pub(crate) fn along_wanted(&self, choice: Enclosure, level: usize) -> bool {
+        match choice {
+            Enclosure::Interval => false,
+            Enclosure::Affine => true,
+            Enclosure::Auto => {
+                let (tries, wins) = self.levels[level.min(MV_LEVELS - 1)];
+                let (num, den) = ALONG_WIN_SHARE;
+                tries < AFFINE_MIN_TRIES || wins * den >= tries * num
+            }
         }
     }
 

@@ -8,14 +8,15 @@ use super::refine::{refine, sign_change};
 use super::sweep::{Piece, Search, SweepState, Visit, sweep};
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, ray_box};
-use crate::render::Hit;
 use crate::render::context::stats::RenderStats;
 use crate::render::enclose::affine::{self, AlongRay};
 use crate::render::enclose::centred::{Centred, Newton, centred, newton};
+use crate::render::enclose::mean_value::MV_LEVELS;
 use crate::render::enclose::proof;
 use crate::render::prune::scope::Scope;
 use crate::render::prune::scope::TileState;
 use crate::render::view::camera::PixelRay;
+use crate::render::{Enclosure, Hit};
 
 // Caps that keep a pathological function from stalling a render; reaching
 // one counts as a hit at the current piece (never a silent miss).
@@ -209,8 +210,8 @@ impl Search for RaySearch<'_, '_> {
 }
 
 // Where the scene's enclosure choice asks for them (`auto`: while the
-// tile's own record for single rays says they pay), the affine forms
-// along the ray: drops from `cand` the objects they prove free of surface on the
+// tile's own record for single rays says they pay at the piece's size
+// class, `piece_level`), the second-order forms along the ray: drops from `cand` the objects they prove free of surface on the
 // piece, and returns the hull of the parts where the rest may have
 // theirs (`None`: none left). Where a variable appears many times (an
 // expanded polynomial) the natural interval of a piece stays wide however
@@ -224,7 +225,20 @@ fn affine_narrows(
     cand: &mut Vec<u32>,
     st: &mut TileState,
 ) -> Option<Piece> {
-    if !st.affine_along.affine_wanted(tr.ctx.enclosure, 0) {
+    // Under `auto`, a piece none of whose candidates is a polynomial
+    // goes on at once: this runs on every piece the intervals leave
+    // undecided.
+    let choice = tr.ctx.enclosure;
+    if choice == Enclosure::Interval
+        || (choice == Enclosure::Auto
+            && !cand
+                .iter()
+                .any(|&k| affine::along_may_pay(&tr.ctx, k as usize)))
+    {
+        return (!cand.is_empty()).then_some((a, b));
+    }
+    let level = piece_level(b - a, tr.ctx.cam.tolerance(a));
+    if !st.affine_along.along_wanted(choice, level) {
         return (!cand.is_empty()).then_some((a, b));
     }
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -237,18 +251,32 @@ fn affine_narrows(
         };
         if along.is_some() {
             // A win: the object is dropped, or its part is at most half.
-            // The policy counts drops only: a try takes the time of some
-            // twenty interval evaluations, and a clip saves a few
-            // bisections (docs/performance.md).
+            // The policy counts drops only, per piece size: a try takes
+            // the time of some ten interval evaluations, a clip saves a
+            // few bisections, and the form drops the wider pieces of an
+            // expanded polynomial only (TM2_REPORT.md).
             let win = pb - pa <= 0.5 * (b - a);
             st.stats.affine_ray_wins += u64::from(win);
-            st.affine_along.record(0, along == Some(AlongRay::Free));
+            st.affine_along.record(level, along == Some(AlongRay::Free));
         }
         lo = lo.min(pa);
         hi = hi.max(pb);
         pa <= pb
     });
     (!cand.is_empty()).then_some((lo, hi))
+}
+
+// The size class of a ray piece `width` wide for the forms' policy: a
+// class per factor of 4 of its width over the depth tolerance `tol`
+// (from the quotient's binary exponent, which is floor(log2) for a
+// normal one: this runs on every piece the intervals leave undecided).
+fn piece_level(width: f64, tol: f64) -> usize {
+    let r = width / tol;
+    if !(r.is_finite() && r > 1.0) {
+        return 0;
+    }
+    let log2 = ((r.to_bits() >> 52) & 0x7ff).saturating_sub(1023);
+    ((log2 / 2) as usize).min(MV_LEVELS - 1)
 }
 
 // A narrow piece with 0 ∈ F: refine a sign change if the ends show one,
