@@ -159,7 +159,7 @@ pub(crate) enum AlongRay {
 /// expanded polynomial each power's Chebyshev remainder added to the
 /// error, and the first-order form clipped only pieces about 0.003 wide;
 /// a try of the second-order one costs about a third more and drops
-/// pieces 30 times as wide (TM2_REPORT.md).
+/// pieces 30 times as wide (docs/performance.md).
 ///
 /// [`eval::affine::quadratic_along`]: crate::eval::affine::quadratic_along
 pub(crate) fn affine_along_ray(

@@ -33,7 +33,7 @@ const AFFINE_WIN_RATIO: u64 = 2;
 /// drops saves the interval evaluations of the piece's bisection, which
 /// on the examples came to less than that wherever under three tries in
 /// four dropped theirs, and to far more on the expanded polynomial, where
-/// nineteen in twenty do (TM2_REPORT.md).
+/// nineteen in twenty do (docs/performance.md).
 const ALONG_WIN_SHARE: (u64, u64) = (3, 4);
 
 /// Whether a form still pays in one tile, per block size.

@@ -254,7 +254,7 @@ fn affine_narrows(
             // The policy counts drops only, per piece size: a try takes
             // the time of some ten interval evaluations, a clip saves a
             // few bisections, and the form drops the wider pieces of an
-            // expanded polynomial only (TM2_REPORT.md).
+            // expanded polynomial only (docs/performance.md).
             let win = pb - pa <= 0.5 * (b - a);
             st.stats.affine_ray_wins += u64::from(win);
             st.affine_along.record(level, along == Some(AlongRay::Free));
