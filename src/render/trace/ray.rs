@@ -211,9 +211,10 @@ impl Search for RaySearch<'_, '_> {
 
 // Where the scene's enclosure choice asks for them (`auto`: while the
 // tile's own record for single rays says they pay at the piece's size
-// class, `piece_level`), the second-order forms along the ray: drops from `cand` the objects they prove free of surface on the
-// piece, and returns the hull of the parts where the rest may have
-// theirs (`None`: none left). Where a variable appears many times (an
+// class, `piece_level`), the second-order forms along the ray: drops
+// from `cand` the objects they prove free of surface on the piece, and
+// returns the hull of the parts where the rest may have theirs (`None`:
+// none left). Where a variable appears many times (an
 // expanded polynomial) the natural interval of a piece stays wide however
 // narrow the piece, so a ray bisected thousands of pieces that the form,
 // which keeps the ray's coordinates tied, rejects or clips at once.
