@@ -43,9 +43,10 @@ pub(crate) struct EvalSet {
 pub(crate) struct FormTape {
     /// The tape.
     pub tape: Arc<Tape>,
-    /// Whether it is a polynomial (`enclose::affine::polynomial`): `auto`
-    /// tries the form along a ray on such objects only.
-    pub polynomial: bool,
+    /// Whether `auto` tries the form along a ray on the object: a
+    /// polynomial whose affine forms beat its intervals by far
+    /// (`enclose::affine::along_may_pay`).
+    pub along_pays: bool,
 }
 
 /// The read-only evaluation context of one render (or of a region of it,

@@ -38,8 +38,8 @@ pub(crate) fn whole_tapes(ctx: &Context<'_>, choice: Enclosure) -> Arc<[Option<F
             let f = e.function()?;
             (f.live_count() <= AFFINE_MAX_OPS).then(|| {
                 let tape = Arc::new(Tape::new(f));
-                let polynomial = polynomial(&tape) && dependency_gain(&tape, ctx) >= ALONG_MIN_GAIN;
-                FormTape { tape, polynomial }
+                let along_pays = polynomial(&tape) && dependency_gain(&tape, ctx) >= ALONG_MIN_GAIN;
+                FormTape { tape, along_pays }
             })
         })
         .collect()
@@ -130,12 +130,13 @@ fn tape_for<'c>(ctx: &'c Context<'_>, k: usize, b: &IBox) -> Option<&'c Tape> {
 }
 
 /// Whether `auto` tries the form along a ray on object `k`: its whole
-/// function is a [`polynomial`] short enough for the affine forms.
+/// function is a [`polynomial`] short enough for the affine forms, whose
+/// affine forms beat its intervals at least [`ALONG_MIN_GAIN`] times.
 pub(crate) fn along_may_pay(ctx: &Context<'_>, k: usize) -> bool {
     ctx.affine_tapes
         .get(k)
         .and_then(Option::as_ref)
-        .is_some_and(|t| t.polynomial)
+        .is_some_and(|t| t.along_pays)
 }
 
 /// What an object's form along a ray proves over a piece of the ray.
@@ -153,7 +154,8 @@ pub(crate) enum AlongRay {
 /// symbol ([`eval::affine::quadratic_along`]): where the quadratic stays
 /// above its error, f is positive, so the piece shrinks to the hull of
 /// where it does not. `None` where no tape pays (as [`affine_signs`]),
-/// and under `auto` for an object that is not a [`polynomial`].
+/// and under `auto` for an object on which it does not pay
+/// ([`along_may_pay`]).
 ///
 /// It replaced the first-order form along rays (`Affine<1>`): on the
 /// expanded polynomial each power's Chebyshev remainder added to the
