@@ -146,3 +146,45 @@ fn unsupported_extensions_fail_before_rendering() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn png_compression_levels_change_the_file_size_not_the_pixels() {
+    let dir = scratch("png_compression");
+    let size = ["--size", "96x80"];
+    let mut decoded = Vec::new();
+    let mut bytes = Vec::new();
+    for level in ["fast", "balanced", "high"] {
+        let (c, d) = (
+            dir.join(format!("{level}.png")),
+            dir.join(format!("{level}-d.png")),
+        );
+        let flags = [&size[..], &["--png-compression", level, "--depth"]].concat();
+        let o = render(
+            &example("csg.ib"),
+            &c,
+            &[&flags[..], &[d.to_str().unwrap()]].concat(),
+        );
+        ok(&o);
+        decoded.push((image::open(&c).unwrap(), image::open(&d).unwrap()));
+        bytes.push(std::fs::metadata(&c).unwrap().len());
+    }
+    for (c, d) in &decoded[1..] {
+        assert_eq!(c.to_rgb8(), decoded[0].0.to_rgb8());
+        assert_eq!(d.to_luma16(), decoded[0].1.to_luma16());
+    }
+    // A level that did not reach the encoder would leave the sizes equal.
+    assert!(
+        bytes[2] < bytes[0],
+        "high {} bytes, fast {}",
+        bytes[2],
+        bytes[0]
+    );
+    let bad = render(
+        &example("csg.ib"),
+        &dir.join("x.png"),
+        &[&size[..], &["--png-compression", "zip"]].concat(),
+    );
+    assert_eq!(bad.status.code(), Some(2), "a usage error");
+    assert!(stderr(&bad).contains("zip"), "{}", stderr(&bad));
+    let _ = std::fs::remove_dir_all(&dir);
+}
