@@ -2,10 +2,12 @@
 //! reference interpreter ([`interp`]), native code from Cranelift ([`jit`]),
 //! the regional evaluator that answers with a function pruned to a region
 //! ([`regional`]), tapes and the evaluator that runs one ([`tape`],
-//! [`taped`]), and building a scene's evaluators ([`build`]).
+//! [`taped`]; [`cpu`], the path their passes are compiled for), and
+//! building a scene's evaluators ([`build`]).
 
 pub mod affine;
 pub mod build;
+pub mod cpu;
 pub mod interp;
 pub mod jit;
 pub mod regional;

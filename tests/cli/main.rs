@@ -6,6 +6,7 @@
 
 #[path = "../common/mod.rs"]
 mod common;
+mod cpu;
 mod export;
 mod formats;
 mod ir;

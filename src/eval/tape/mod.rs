@@ -41,6 +41,7 @@ use crate::ir::semantics::{interval_binary, interval_unary};
 use crate::ir::{BinaryOp, Function, Op, UnaryOp, ValueId, Var};
 
 mod run;
+mod wide;
 
 use run::{Registers, fixed_registers};
 

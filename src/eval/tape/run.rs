@@ -2,7 +2,8 @@
 //! gradients or a directional derivative, and batches of points or boxes a
 //! column per register. Every result is the reference interpreter's bits.
 
-use super::{Form, Instr, Reg, Tape, Workspace};
+use super::{Form, Instr, Reg, Tape, Workspace, wide};
+use crate::eval::cpu::{self, CpuPath};
 use crate::eval::interp::{
     IntervalDual, dual_binary, dual_powi, dual_unary, point_dual_binary, point_dual_powi,
     point_dual_unary,
@@ -20,21 +21,42 @@ impl Tape {
     /// (the reference rules' `match` per op, a call each, costs more than
     /// the op).
     pub fn point(&self, p: [f64; 3], ws: &mut Workspace) -> f64 {
+        self.point_on(cpu::path(), p, ws)
+    }
+
+    /// [`Tape::point`] on the compiled path `path` (the same bits on
+    /// each).
+    pub fn point_on(&self, path: CpuPath, p: [f64; 3], ws: &mut Workspace) -> f64 {
         let root = self.root_reg() as Reg;
-        match fixed_registers(&mut ws.points, self.registers, 0.0) {
-            Some(m) => point_pass(&self.code, p, m, root),
-            None => point_pass(&self.code, p, &mut ws.points[..], root),
+        let code = &self.code[..];
+        match (fixed_registers(&mut ws.points, self.registers, 0.0), path) {
+            (Some(m), CpuPath::Wide) => wide::point_fixed(code, p, m, root),
+            (Some(m), CpuPath::Baseline) => point_pass(code, p, m, root),
+            (None, CpuPath::Wide) => wide::point_slice(code, p, &mut ws.points[..], root),
+            (None, CpuPath::Baseline) => point_pass(code, p, &mut ws.points[..], root),
         }
     }
 
     /// An interval containing f over `b`, the same bits as the reference
     /// interpreter's (see [`Tape::point`]).
     pub fn interval(&self, b: [Interval; 3], ws: &mut Workspace) -> Interval {
+        self.interval_on(cpu::path(), b, ws)
+    }
+
+    /// [`Tape::interval`] on the compiled path `path` (the same bits on
+    /// each).
+    pub fn interval_on(&self, path: CpuPath, b: [Interval; 3], ws: &mut Workspace) -> Interval {
         let root = self.root_reg() as Reg;
+        let code = &self.code[..];
         let zero = Interval::point(0.0);
-        match fixed_registers(&mut ws.intervals, self.registers, zero) {
-            Some(m) => interval_pass(&self.code, b, m, root),
-            None => interval_pass(&self.code, b, &mut ws.intervals[..], root),
+        match (
+            fixed_registers(&mut ws.intervals, self.registers, zero),
+            path,
+        ) {
+            (Some(m), CpuPath::Wide) => wide::interval_fixed(code, b, m, root),
+            (Some(m), CpuPath::Baseline) => interval_pass(code, b, m, root),
+            (None, CpuPath::Wide) => wide::interval_slice(code, b, &mut ws.intervals[..], root),
+            (None, CpuPath::Baseline) => interval_pass(code, b, &mut ws.intervals[..], root),
         }
     }
 
@@ -155,28 +177,23 @@ impl Tape {
 
     /// `out[i] = f(xs[i], ys[i], zs[i])`, the same bits as the reference
     /// interpreter.
-    pub fn point_batch(&self, [xs, ys, zs]: [&[f64]; 3], out: &mut [f64], ws: &mut Workspace) {
-        let n = out.len();
-        assert!(xs.len() == n && ys.len() == n && zs.len() == n);
-        // Every register is written before it is read (the tape is in
-        // order), so the columns need no clearing between calls.
-        let m = &mut ws.points;
-        if m.len() < self.registers * n {
-            m.resize(self.registers * n, 0.0);
+    pub fn point_batch(&self, xyz: [&[f64]; 3], out: &mut [f64], ws: &mut Workspace) {
+        self.point_batch_on(cpu::path(), xyz, out, ws);
+    }
+
+    /// [`Tape::point_batch`] on the compiled path `path` (the same bits on
+    /// each).
+    pub fn point_batch_on(
+        &self,
+        path: CpuPath,
+        xyz: [&[f64]; 3],
+        out: &mut [f64],
+        ws: &mut Workspace,
+    ) {
+        match path {
+            CpuPath::Wide => wide::point_batch(self, xyz, out, ws),
+            CpuPath::Baseline => point_batch_pass(self, xyz, out, ws),
         }
-        let m = &mut m[..self.registers * n];
-        for instr in &self.code {
-            let at = |r: Reg| r as usize * n;
-            match instr.form() {
-                Form::Var(o, v) => m[at(o)..at(o) + n].copy_from_slice([xs, ys, zs][v.index()]),
-                Form::Const(o, c) => m[at(o)..at(o) + n].fill(c),
-                Form::Unary(o, op, a) => point_unary_column(m, n, [o, a], op),
-                Form::Binary(o, op, a, b) => point_binary_column(m, n, [o, a, b], op),
-                Form::Powi(o, a, k) => apply1(m, n, [o, a], |x| point_powi(x, k)),
-            }
-        }
-        let r = self.root_reg() * n;
-        out.copy_from_slice(&m[r..r + n]);
     }
 
     /// `out[i]` contains f over `boxes[i]`, the same bits as the reference
@@ -187,38 +204,95 @@ impl Tape {
         out: &mut [Interval],
         ws: &mut Workspace,
     ) {
-        let n = out.len();
-        assert_eq!(boxes.len(), n);
-        // As in `point_batch`: no clearing, columns updated in place.
-        let m = &mut ws.intervals;
-        if m.len() < self.registers * n {
-            m.resize(self.registers * n, Interval::point(0.0));
-        }
-        let m = &mut m[..self.registers * n];
-        for instr in &self.code {
-            let col = |r: Reg| r as usize * n;
-            match instr.form() {
-                Form::Var(o, v) => {
-                    for (d, b) in m[col(o)..col(o) + n].iter_mut().zip(boxes) {
-                        *d = b[v.index()];
-                    }
-                }
-                Form::Const(o, c) => m[col(o)..col(o) + n].fill(Interval::point(c)),
-                Form::Unary(o, op, a) => interval_unary_column(m, n, [o, a], op),
-                Form::Binary(o, op, a, b) => interval_binary_column(m, n, [o, a, b], op),
-                Form::Powi(o, a, k) => apply1(m, n, [o, a], |x| x.powi(k)),
-            }
-        }
-        let r = self.root_reg() * n;
-        out.copy_from_slice(&m[r..r + n]);
+        self.interval_batch_on(cpu::path(), boxes, out, ws);
     }
+
+    /// [`Tape::interval_batch`] on the compiled path `path` (the same bits
+    /// on each).
+    pub fn interval_batch_on(
+        &self,
+        path: CpuPath,
+        boxes: &[[Interval; 3]],
+        out: &mut [Interval],
+        ws: &mut Workspace,
+    ) {
+        match path {
+            CpuPath::Wide => wide::interval_batch(self, boxes, out, ws),
+            CpuPath::Baseline => interval_batch_pass(self, boxes, out, ws),
+        }
+    }
+}
+
+/// [`Tape::point_batch`]'s pass, inlined into each path's code.
+#[inline(always)]
+pub(super) fn point_batch_pass(
+    tape: &Tape,
+    [xs, ys, zs]: [&[f64]; 3],
+    out: &mut [f64],
+    ws: &mut Workspace,
+) {
+    let n = out.len();
+    assert!(xs.len() == n && ys.len() == n && zs.len() == n);
+    // Every register is written before it is read (the tape is in
+    // order), so the columns need no clearing between calls.
+    let m = &mut ws.points;
+    if m.len() < tape.registers * n {
+        m.resize(tape.registers * n, 0.0);
+    }
+    let m = &mut m[..tape.registers * n];
+    for instr in &tape.code {
+        let at = |r: Reg| r as usize * n;
+        match instr.form() {
+            Form::Var(o, v) => m[at(o)..at(o) + n].copy_from_slice([xs, ys, zs][v.index()]),
+            Form::Const(o, c) => m[at(o)..at(o) + n].fill(c),
+            Form::Unary(o, op, a) => point_unary_column(m, n, [o, a], op),
+            Form::Binary(o, op, a, b) => point_binary_column(m, n, [o, a, b], op),
+            Form::Powi(o, a, k) => apply1(m, n, [o, a], |x| point_powi(x, k)),
+        }
+    }
+    let r = tape.root_reg() * n;
+    out.copy_from_slice(&m[r..r + n]);
+}
+
+/// [`Tape::interval_batch`]'s pass, inlined into each path's code.
+#[inline(always)]
+pub(super) fn interval_batch_pass(
+    tape: &Tape,
+    boxes: &[[Interval; 3]],
+    out: &mut [Interval],
+    ws: &mut Workspace,
+) {
+    let n = out.len();
+    assert_eq!(boxes.len(), n);
+    // As in `point_batch`: no clearing, columns updated in place.
+    let m = &mut ws.intervals;
+    if m.len() < tape.registers * n {
+        m.resize(tape.registers * n, Interval::point(0.0));
+    }
+    let m = &mut m[..tape.registers * n];
+    for instr in &tape.code {
+        let col = |r: Reg| r as usize * n;
+        match instr.form() {
+            Form::Var(o, v) => {
+                for (d, b) in m[col(o)..col(o) + n].iter_mut().zip(boxes) {
+                    *d = b[v.index()];
+                }
+            }
+            Form::Const(o, c) => m[col(o)..col(o) + n].fill(Interval::point(c)),
+            Form::Unary(o, op, a) => interval_unary_column(m, n, [o, a], op),
+            Form::Binary(o, op, a, b) => interval_binary_column(m, n, [o, a, b], op),
+            Form::Powi(o, a, k) => apply1(m, n, [o, a], |x| x.powi(k)),
+        }
+    }
+    let r = tape.root_reg() * n;
+    out.copy_from_slice(&m[r..r + n]);
 }
 
 /// Tapes with at most this many registers run on a fixed-size register
 /// file indexed modulo its size, which the compiler proves in bounds: no
 /// bounds check per operand (a tape's registers lie below its count, so
 /// the modulo never wraps). Longer tapes run on a slice.
-const FIXED_REGISTERS: usize = 256;
+pub(super) const FIXED_REGISTERS: usize = 256;
 
 /// A register file: one value per register.
 pub(super) trait Registers<T: Copy> {
@@ -276,7 +350,7 @@ pub(super) fn fixed_registers<T: Copy>(
 
 /// [`Tape::point`]'s pass over `code` with register file `m`.
 #[inline(always)]
-fn point_pass<M: Registers<f64> + ?Sized>(
+pub(super) fn point_pass<M: Registers<f64> + ?Sized>(
     code: &[Instr],
     p: [f64; 3],
     m: &mut M,
@@ -306,7 +380,7 @@ fn point_pass<M: Registers<f64> + ?Sized>(
 
 /// [`Tape::interval`]'s pass over `code` with register file `m`.
 #[inline(always)]
-fn interval_pass<M: Registers<Interval> + ?Sized>(
+pub(super) fn interval_pass<M: Registers<Interval> + ?Sized>(
     code: &[Instr],
     b: [Interval; 3],
     m: &mut M,

@@ -448,3 +448,53 @@ fn pruning_by_sign_keeps_the_sign_in_the_box() {
         "sign pruning shorter than value pruning {shorter} times"
     );
 }
+
+// Both compiled paths (`crate::eval::cpu`) give the interpreter's bits, on
+// fixed register files and on register slices, one at a time and in
+// batches. The AVX2 and FMA clones run only where the CPU has both; the
+// test says on stderr when they could not run here.
+#[test]
+fn both_cpu_paths_give_the_interpreters_bits() {
+    use crate::eval::cpu::{self, CpuPath};
+    if !cpu::wide_clones_run() {
+        eprintln!("this CPU lacks AVX2 or FMA: both paths run the baseline code");
+    }
+    let mut rng = Rng::new(41);
+    let mut ws = Workspace::default();
+    let mut slices = 0;
+    // Random functions, and two past the fixed register file.
+    for seed in 0..162 {
+        let f = match seed {
+            160 => wide(300),
+            161 => wide(400),
+            _ => random_function(seed, 9),
+        };
+        let tape = Tape::new(&f);
+        slices += usize::from(tape.registers() > super::run::FIXED_REGISTERS);
+        let it = Interpreter::new(f);
+        let pts: Vec<[f64; 3]> = (0..9)
+            .map(|_| std::array::from_fn(|_| rng.range(-3.0, 3.0)))
+            .collect();
+        let cols: [Vec<f64>; 3] = std::array::from_fn(|c| pts.iter().map(|p| p[c]).collect());
+        let boxes: Vec<_> = (0..9).map(|_| random_box(&mut rng, 3.0)).collect();
+        for path in [CpuPath::Baseline, CpuPath::Wide] {
+            let mut out = vec![0.0; pts.len()];
+            tape.point_batch_on(path, [&cols[0], &cols[1], &cols[2]], &mut out, &mut ws);
+            for (p, v) in pts.iter().zip(&out) {
+                let want = it.point(*p);
+                assert!(same(*v, want), "{path:?} batch, seed {seed} at {p:?}");
+                let one = tape.point_on(path, *p, &mut ws);
+                assert!(same(one, want), "{path:?}, seed {seed} at {p:?}");
+            }
+            let mut iv = vec![Interval::point(0.0); boxes.len()];
+            tape.interval_batch_on(path, &boxes, &mut iv, &mut ws);
+            for (b, v) in boxes.iter().zip(&iv) {
+                let want = it.interval(*b);
+                assert!(same_iv(*v, want), "{path:?} batch, seed {seed} over {b:?}");
+                let one = tape.interval_on(path, *b, &mut ws);
+                assert!(same_iv(one, want), "{path:?}, seed {seed} over {b:?}");
+            }
+        }
+    }
+    assert!(slices > 0, "no tape was long enough for a register slice");
+}
