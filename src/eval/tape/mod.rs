@@ -31,6 +31,7 @@
 
 use std::sync::Arc;
 
+use crate::eval::cpu::{self, CpuPath};
 use crate::eval::interp::IntervalDual;
 use crate::interval::Interval;
 use crate::ir::prune::{
@@ -328,6 +329,18 @@ impl Tape {
         max_len: usize,
         ws: &mut Workspace,
     ) -> Option<PrunedTape> {
+        self.prune_to_at_most_on(cpu::path(), b, max_len, ws)
+    }
+
+    /// [`Tape::prune_to_at_most`] on the compiled path `path` (the same
+    /// tape on each).
+    pub fn prune_to_at_most_on(
+        &self,
+        path: CpuPath,
+        b: [Interval; 3],
+        max_len: usize,
+        ws: &mut Workspace,
+    ) -> Option<PrunedTape> {
         let ops = &self.ssa.ops;
         let n = ops.len();
         // alias[k]: the op whose value op k always equals on the box.
@@ -341,6 +354,9 @@ impl Tape {
             fixed_registers(&mut ws.intervals, self.registers, zero),
             fixed_registers(&mut ws.facts, self.registers, Facts::default()),
         ) {
+            (Some(regs), Some(fact)) if path == CpuPath::Wide => {
+                wide::prune_fixed(&self.code, ops, &self.sign_only, b, (regs, fact), alias)
+            }
             (Some(regs), Some(fact)) => {
                 prune_pass(&self.code, ops, &self.sign_only, b, (regs, fact), alias)
             }

@@ -462,6 +462,7 @@ fn both_cpu_paths_give_the_interpreters_bits() {
     let mut rng = Rng::new(41);
     let mut ws = Workspace::default();
     let mut slices = 0;
+    let mut pruned_any = false;
     // Random functions, and two past the fixed register file.
     for seed in 0..162 {
         let f = match seed {
@@ -494,7 +495,17 @@ fn both_cpu_paths_give_the_interpreters_bits() {
                 let one = tape.interval_on(path, *b, &mut ws);
                 assert!(same_iv(one, want), "{path:?}, seed {seed} over {b:?}");
             }
+            // Pruned to a small box, each path writes the same tape.
+            let small = random_box(&mut rng, 0.3);
+            let pruned = |p, ws: &mut Workspace| {
+                let t = tape.prune_to_at_most_on(p, small, usize::MAX, ws);
+                t.map(|t| (t.decided, t.tape.code().to_vec()))
+            };
+            let here = pruned(path, &mut ws);
+            pruned_any |= here.is_some();
+            assert_eq!(here, pruned(CpuPath::Baseline, &mut ws), "seed {seed}");
         }
     }
     assert!(slices > 0, "no tape was long enough for a register slice");
+    assert!(pruned_any, "no tape was pruned");
 }

@@ -9,8 +9,10 @@ use multiversion::multiversion;
 use super::run::{
     FIXED_REGISTERS, interval_batch_pass, interval_pass, point_batch_pass, point_pass,
 };
-use super::{Instr, Reg, Tape, Workspace};
+use super::passes::prune_pass;
+use super::{Facts, Instr, Reg, Tape, Workspace};
 use crate::interval::Interval;
+use crate::ir::Op;
 
 /// [`Tape::point`]'s pass on a fixed register file.
 #[multiversion(targets("x86_64+avx2+fma"))]
@@ -66,4 +68,17 @@ pub(super) fn interval_batch(
     ws: &mut Workspace,
 ) {
     interval_batch_pass(tape, boxes, out, ws);
+}
+
+/// The pruning pass of [`Tape::prune_to_at_most`] on fixed register files.
+#[multiversion(targets("x86_64+avx2+fma"))]
+pub(super) fn prune_fixed(
+    code: &[Instr],
+    ops: &[Op],
+    sign_only: &[bool],
+    b: [Interval; 3],
+    files: (&mut [Interval; FIXED_REGISTERS], &mut [Facts; FIXED_REGISTERS]),
+    alias: &mut [usize],
+) -> usize {
+    prune_pass(code, ops, sign_only, b, files, alias)
 }
