@@ -355,7 +355,7 @@ impl Tape {
             fixed_registers(&mut ws.facts, self.registers, Facts::default()),
         ) {
             (Some(regs), Some(fact)) if path == CpuPath::Wide => {
-                wide::prune_fixed(&self.code, ops, &self.sign_only, b, (regs, fact), alias)
+                wide::prune_fixed(&self.code, ops, &self.sign_only, b, regs, fact, alias)
             }
             (Some(regs), Some(fact)) => {
                 prune_pass(&self.code, ops, &self.sign_only, b, (regs, fact), alias)

@@ -6,10 +6,10 @@
 
 use multiversion::multiversion;
 
+use super::passes::prune_pass;
 use super::run::{
     FIXED_REGISTERS, interval_batch_pass, interval_pass, point_batch_pass, point_pass,
 };
-use super::passes::prune_pass;
 use super::{Facts, Instr, Reg, Tape, Workspace};
 use crate::interval::Interval;
 use crate::ir::Op;
@@ -77,8 +77,9 @@ pub(super) fn prune_fixed(
     ops: &[Op],
     sign_only: &[bool],
     b: [Interval; 3],
-    files: (&mut [Interval; FIXED_REGISTERS], &mut [Facts; FIXED_REGISTERS]),
+    regs: &mut [Interval; FIXED_REGISTERS],
+    facts: &mut [Facts; FIXED_REGISTERS],
     alias: &mut [usize],
 ) -> usize {
-    prune_pass(code, ops, sign_only, b, files, alias)
+    prune_pass(code, ops, sign_only, b, (regs, facts), alias)
 }
