@@ -188,3 +188,73 @@ fn a_plate_thinner_and_closer_than_half_a_pixel_casts_its_shadow() {
         assert!(wrong.is_empty(), "{aa:?}: {wrong:?}");
     }
 }
+
+/// The expanded `(u - 1)^10` of `u`, its terms written out (they cancel:
+/// intervals overestimate it by orders of magnitude).
+fn expanded_tenth_power(u: &str) -> String {
+    let binomial = [1, 10, 45, 120, 210, 252, 210, 120, 45, 10, 1];
+    let terms: Vec<String> = (0..=10)
+        .map(|k| {
+            let sign = if (10 - k) % 2 == 0 { "" } else { "-" };
+            format!("{sign}{}*{u}^{k}", binomial[k])
+        })
+        .collect();
+    format!("({})", terms.join(" + "))
+}
+
+#[test]
+fn a_thin_expanded_rod_casts_its_shadow_and_nothing_else_does() {
+    // The rod (x^10, expanded in u = x + 1) + (y - 0.3)^2 + z^2 <= 0.0009
+    // hangs 0.3 above the floor. Light comes from (-0.5, 1, 0), so the
+    // segment of a floor point (x, 0, z) passes (x - 0.5y, y, z): blocked
+    // where (x - 0.15)^10 + z^2 <= 0.0009 at y = 0.3 (|z| < 0.0299 for
+    // |x - 0.15| < 0.3), never where z^2 > 0.0009. The segments run along
+    // x, over which intervals cannot prove the rod absent (its
+    // expansion cancels), so without the second-order forms along shadow
+    // segments most of the floor near it was drawn shadowed; and the
+    // forms must keep every part of a segment where the rod may lie.
+    let rod = expanded_tenth_power("(x + 1)");
+    let text = format!(
+        "object floor = y;\n\
+         object rod = {rod} + (y - 0.3)^2 + z^2 - 0.0009;\n\
+         camera {{ eye = (0.4, 3, 2.2); target = (0, 0, 0); up = (0, 1, 0); ortho = 1.6; }}\n\
+         bounds = (-1, -0.2, -1) .. (1, 0.5, 1);\n\
+         light {{ direction = (0.5, -1, 0); color = (1, 1, 1); shadows = true; }}\n"
+    );
+    let (scene, out) = render_scene(&text, Aa::None);
+    let o = Oracle::new(&scene, SIZE, SIZE);
+    let (mut shadowed, mut lit, mut wrong) = (0, 0, Vec::new());
+    for k in 0..(SIZE * SIZE) as usize {
+        let (i, j) = (k as u32 % SIZE, k as u32 / SIZE);
+        let (ro, d) = (o.origin(i, j), o.dir());
+        let t = -ro[1] / d[1];
+        let p = at(ro, d, t);
+        // Floor hits only (the rod hides part of the floor).
+        if !out.hit_mask[k] || (out.depth_t[k] - t).abs() > 1e-3 || p[0].abs() > 0.7 {
+            continue;
+        }
+        let dark = out.linear[k][0] <= DARK;
+        if (p[0] - 0.15).abs() < 0.3 && p[2].abs() < 0.025 {
+            shadowed += 1;
+            if !dark {
+                wrong.push((i, j, p, "lit"));
+            }
+        } else if p[2].abs() > 0.05 && p[2].abs() < 0.7 {
+            lit += 1;
+            if dark {
+                wrong.push((i, j, p, "dark"));
+            }
+        }
+    }
+    assert!(
+        shadowed >= 8 && lit > 1000,
+        "{shadowed} shadowed, {lit} lit"
+    );
+    assert!(
+        wrong.is_empty(),
+        "{} wrong: {:?}",
+        wrong.len(),
+        &wrong[..wrong.len().min(5)]
+    );
+    assert!(out.stats.affine_shadow_tries > 0, "{}", out.stats);
+}

@@ -135,6 +135,12 @@ counters! {
         /// Those that dropped an object from the piece or clipped it to
         /// at most half.
         affine_ray_wins: u64 => sum,
+        /// Second-order forms along a single shadow segment's piece tried
+        /// (the segment's parameter as the noise symbol).
+        affine_shadow_tries: u64 => sum,
+        /// Those that dropped an object from the piece or clipped it to
+        /// at most half.
+        affine_shadow_wins: u64 => sum,
         /// Live ops of the functions that were pruned to a tile, summed over
         /// tiles (see `crate::ir::prune`).
         pruned_ops_before: u64 => sum,

@@ -177,14 +177,39 @@ pub(crate) fn affine_along_ray(
     }
     let tape = tape_for(ctx, k, &bx)?;
     stats.affine_ray_tries += 1;
+    Some(along_line(tape, (ray.o, ray.d), (a, b), bx))
+}
+
+/// [`affine_along_ray`] along the shadow segments `q + s·delta` (`q` a
+/// point's box: one segment), over the piece `s ∈ (a, b)` whose box is
+/// `bx`.
+pub(crate) fn affine_along_segment(
+    ctx: &Context<'_>,
+    k: usize,
+    (q, delta): (IBox, IBox),
+    (a, b): (f64, f64),
+    bx: IBox,
+    stats: &mut RenderStats,
+) -> Option<AlongRay> {
+    if ctx.enclosure == Enclosure::Auto && !along_may_pay(ctx, k) {
+        return None;
+    }
+    let tape = tape_for(ctx, k, &bx)?;
+    stats.affine_shadow_tries += 1;
+    Some(along_line(tape, (q, delta), (a, b), bx))
+}
+
+// What `tape`'s second-order form along the points `o + t·d` proves over
+// the piece `t ∈ (a, b)`, whose box is `bx`.
+fn along_line(tape: &Tape, (o, d): (IBox, IBox), (a, b): (f64, f64), bx: IBox) -> AlongRay {
     let t = Interval::new(a, b);
-    let v = quadratic_along(tape, ray.o, ray.d, t, bx);
+    let v = quadratic_along(tape, o, d, t, bx);
     if proof::holds_no_surface(v.range) {
-        return Some(AlongRay::Free);
+        return AlongRay::Free;
     }
     let part = v
         .form
         .may_reach_zero()
         .and_then(|eps| along_parameter(t, eps));
-    Some(part.map_or(AlongRay::Free, |p| AlongRay::Within(p.lo, p.hi)))
+    part.map_or(AlongRay::Free, |p| AlongRay::Within(p.lo, p.hi))
 }
