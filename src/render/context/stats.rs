@@ -267,7 +267,7 @@ mod tests {
         };
         let json = st.to_json();
         let obj = json.as_object().unwrap();
-        assert_eq!(obj.len(), 37);
+        assert_eq!(obj.len(), 39);
         assert!(obj.get("aa_samples").is_none());
         assert_eq!(json["aa_samples_mean"], 2.5);
         assert_eq!(json["rays"], 3);

@@ -15,10 +15,8 @@ use super::reach;
 use super::shade::HitSurface;
 use crate::interval::Interval;
 use crate::interval::boxes::{IBox, box_hull, box_meet, point_box};
-use crate::render::Enclosure;
 use crate::render::context::EvalSet;
 use crate::render::context::stats::RenderStats;
-use crate::render::enclose::affine::{self, AlongRay};
 use crate::render::enclose::monotone::increasing_along;
 use crate::render::enclose::proof;
 use crate::render::prune::cells::{self, CellTapes};
@@ -368,61 +366,6 @@ impl Search for FreeSearch<'_, '_> {
     }
 }
 
-impl FreeSearch<'_, '_> {
-    // Where the scene's enclosure choice asks for them (`auto`: objects
-    // whose forms pay, `affine::along_may_pay`), the second-order forms
-    // along a single segment, as single rays try them (`trace::ray`):
-    // drops from `maybe` the objects they prove free of surface on the
-    // piece, and sweeps only the part where the rest may have theirs,
-    // when that is at most half the piece. A part dropped proves what a
-    // rejected piece proves, nothing about what follows it (`proof`): the
-    // front is then unknown, and a part behind the kept one is swept as a
-    // piece of its own, so that the pieces stay contiguous.
-    fn along_forms(&mut self, tr: &Scope<'_>, (a, c): (f64, f64), bx: IBox) -> Option<Visit<()>> {
-        let seg = self.seg;
-        let choice = tr.ctx.enclosure;
-        if seg.starts.len() != 1
-            || choice == Enclosure::Interval
-            || (choice == Enclosure::Auto
-                && !self
-                    .maybe
-                    .iter()
-                    .any(|&k| affine::along_may_pay(&tr.ctx, k)))
-        {
-            return None;
-        }
-        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        let st = &mut *self.st;
-        self.maybe.retain(|&k| {
-            let line = (seg.q, seg.delta);
-            let along = affine::affine_along_segment(&tr.ctx, k, line, (a, c), bx, &mut st.stats);
-            let (pa, pb) = match along {
-                None => (a, c),
-                Some(AlongRay::Free) => (f64::INFINITY, f64::NEG_INFINITY),
-                Some(AlongRay::Within(pa, pb)) => (pa, pb),
-            };
-            if along.is_some() {
-                st.stats.affine_shadow_wins += u64::from(pb - pa <= 0.5 * (c - a));
-            }
-            lo = lo.min(pa);
-            hi = hi.max(pb);
-            pa <= pb
-        });
-        if self.maybe.is_empty() {
-            self.sw.front = Front::Unknown;
-            return Some(Visit::Drop);
-        }
-        // (A part of no width goes on as the whole piece: pieces have a < c.)
-        if hi - lo > 0.5 * (c - a) || lo >= hi {
-            return None;
-        }
-        if lo > a {
-            self.sw.front = Front::Unknown;
-        }
-        Some(Visit::Parts(Some((lo, hi)), (hi < c).then_some((hi, c))))
-    }
-}
-
 // What is proven of the objects at the start of the next piece.
 #[derive(Copy, Clone, PartialEq, Eq)]
 enum Front {
@@ -590,6 +533,10 @@ fn outside_all(
     let b = point_box(p);
     objects.all(|k| proof::outside_at(tr.ctx.interval(k, b, st)))
 }
+
+// The second-order forms along a single segment (`FreeSearch::along_forms`).
+#[path = "shadow_forms.rs"]
+mod forms;
 
 #[cfg(test)]
 #[path = "shadow_hint_tests.rs"]
