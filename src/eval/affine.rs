@@ -26,7 +26,8 @@ use crate::interval::Interval;
 use crate::interval::affine::meet;
 use crate::interval::form::Form;
 use crate::ir::affine_rules::{
-    AffineValue, FormValue, QuadraticValue, affine_binary, affine_powi, affine_unary, run_affine,
+    AffineValue, FormValue, QuadraticValue, affine_binary, affine_powi, affine_powi_sharing,
+    affine_unary, run_affine,
 };
 use crate::ir::{BinaryOp, UnaryOp};
 
@@ -124,8 +125,24 @@ fn run_tape<F: Form>(
     if m.len() < tape.registers() {
         m.resize(tape.registers(), FormValue::EMPTY);
     }
+    // The squares of the form in one register, which the powers reading
+    // it share (an expanded polynomial raises one value to every power),
+    // while that register keeps the value; the same bits as without.
+    let (mut shared, mut squares) = (None::<Reg>, Vec::new());
     for &instr in tape.code() {
-        let (o, v) = step(instr, &var, |r| m[r as usize]);
+        let (o, v) = match instr {
+            Instr::Powi(o, a, n) => {
+                if shared != Some(a) {
+                    shared = Some(a);
+                    squares.clear();
+                }
+                (o, affine_powi_sharing(&m[a as usize], n, &mut squares))
+            }
+            _ => step(instr, &var, |r| m[r as usize]),
+        };
+        if shared == Some(o) {
+            shared = None;
+        }
         m[o as usize] = v;
     }
     m[root(tape)]

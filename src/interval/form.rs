@@ -44,6 +44,13 @@ pub trait Form: Copy + std::fmt::Debug + PartialEq {
     /// power that way than a linearisation over its range does; `None`
     /// where the linearisation is the better rule.
     fn power(&self, n: i32) -> Option<Self>;
+    /// [`Form::power`], the same form, taking the squares `self²`,
+    /// `self⁴`, … from `squares` as far as it holds them and adding those
+    /// it computes: the powers of one operand (an expanded polynomial's)
+    /// then share their squares.
+    fn power_sharing(&self, n: i32, _squares: &mut Vec<Self>) -> Option<Self> {
+        self.power(n)
+    }
     /// The centre (the value where every noise symbol is 0).
     fn centre(&self) -> f64;
     /// An upper bound of the distance from the centre that the noise

@@ -93,10 +93,22 @@ impl Quadratic {
         [c0, c1, c2]
     }
 
-    /// `selfⁿ`, `n ≥ 1`, by binary powering (squares and products).
-    fn powered(&self, n: u32) -> Quadratic {
-        let (mut base, mut acc, mut k) = (*self, None::<Quadratic>, n);
+    /// `selfⁿ`, `n ≥ 1`, by binary powering (squares and products), the
+    /// squares `self^(2^j)` taken from `squares[j - 1]` where it holds
+    /// them and pushed there where it does not (the same squares, so the
+    /// same bits, either way).
+    fn powered(&self, n: u32, squares: &mut Vec<Quadratic>) -> Quadratic {
+        let (mut acc, mut k, mut j) = (None::<Quadratic>, n, 0);
         loop {
+            let base = if j == 0 {
+                *self
+            } else {
+                if squares.len() < j {
+                    let below = squares.last().copied().unwrap_or(*self);
+                    squares.push(below.square());
+                }
+                squares[j - 1]
+            };
             if k & 1 == 1 {
                 acc = Some(acc.map_or(base, |a| a.mul(&base)));
             }
@@ -104,7 +116,7 @@ impl Quadratic {
             if k == 0 {
                 return acc.unwrap_or(base);
             }
-            base = base.square();
+            j += 1;
         }
     }
 
@@ -325,7 +337,11 @@ impl Form for Quadratic {
     // Products keep each step's second-order terms, where a Chebyshev
     // linearisation over the range puts them all in the error.
     fn power(&self, n: i32) -> Option<Self> {
-        (n >= 1).then(|| self.powered(n.unsigned_abs()))
+        (n >= 1).then(|| self.powered(n.unsigned_abs(), &mut Vec::new()))
+    }
+
+    fn power_sharing(&self, n: i32, squares: &mut Vec<Self>) -> Option<Self> {
+        (n >= 1).then(|| self.powered(n.unsigned_abs(), squares))
     }
 
     fn centre(&self) -> f64 {

@@ -270,13 +270,24 @@ pub fn affine_binary<F: Form>(op: BinaryOp, a: &FormValue<F>, b: &FormValue<F>) 
 
 /// Affine rule of `powi(a, n)`.
 pub fn affine_powi<F: Form>(a: &FormValue<F>, n: i32) -> FormValue<F> {
+    affine_powi_sharing(a, n, &mut Vec::new())
+}
+
+/// [`affine_powi`], the same value, with the squares of `a`'s form shared
+/// through `squares` (see [`Form::power_sharing`]): empty, or what earlier
+/// powers of this very value left there.
+pub fn affine_powi_sharing<F: Form>(
+    a: &FormValue<F>,
+    n: i32,
+    squares: &mut Vec<F>,
+) -> FormValue<F> {
     let iv = a.range.powi(n);
     if iv.is_empty() {
         return FormValue::EMPTY;
     }
     // A form that keeps a power's higher terms by products takes them.
     if n >= 3
-        && let Some(p) = a.form.power(n)
+        && let Some(p) = a.form.power_sharing(n, squares)
     {
         let ulps = 2 * (32 - n.unsigned_abs().leading_zeros()) + 1;
         return finish(p, iv, ulps);
