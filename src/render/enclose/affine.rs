@@ -18,7 +18,6 @@ use crate::render::Enclosure;
 use crate::render::context::stats::RenderStats;
 use crate::render::context::{Context, FormTape};
 use crate::render::enclose::proof::{self, SignBound};
-use crate::render::view::camera::PixelRay;
 
 /// Functions with more live ops than this get no affine form: unions of
 /// many objects are min/max trees, where the form falls back to the
@@ -149,8 +148,10 @@ pub(crate) enum AlongRay {
     Within(f64, f64),
 }
 
-/// Object `k`'s second-order form along `ray` over the piece `(a, b)`,
-/// whose box is `bx`, a quadratic in the ray parameter's one noise
+/// Object `k`'s second-order form along the line `o + t·d` (a single
+/// ray, or a shadow segment: origin and direction anywhere in the boxes
+/// `o` and `d`) over the piece `t ∈ (a, b)`, whose box is `bx`, a
+/// quadratic in the line parameter's one noise
 /// symbol ([`eval::affine::quadratic_along`]): where the quadratic stays
 /// above its error, f is positive, so the piece shrinks to the hull of
 /// where it does not. `None` where no tape pays (as [`affine_signs`]),
@@ -164,52 +165,26 @@ pub(crate) enum AlongRay {
 /// pieces 30 times as wide (docs/performance.md).
 ///
 /// [`eval::affine::quadratic_along`]: crate::eval::affine::quadratic_along
-pub(crate) fn affine_along_ray(
+pub(crate) fn affine_along_line(
     ctx: &Context<'_>,
     k: usize,
-    ray: &PixelRay,
+    o: IBox,
+    d: IBox,
     (a, b): (f64, f64),
     bx: IBox,
-    stats: &mut RenderStats,
 ) -> Option<AlongRay> {
     if ctx.enclosure == Enclosure::Auto && !along_may_pay(ctx, k) {
         return None;
     }
     let tape = tape_for(ctx, k, &bx)?;
-    stats.affine_ray_tries += 1;
-    Some(along_line(tape, (ray.o, ray.d), (a, b), bx))
-}
-
-/// [`affine_along_ray`] along the shadow segments `q + s·delta` (`q` a
-/// point's box: one segment), over the piece `s ∈ (a, b)` whose box is
-/// `bx`.
-pub(crate) fn affine_along_segment(
-    ctx: &Context<'_>,
-    k: usize,
-    (q, delta): (IBox, IBox),
-    (a, b): (f64, f64),
-    bx: IBox,
-    stats: &mut RenderStats,
-) -> Option<AlongRay> {
-    if ctx.enclosure == Enclosure::Auto && !along_may_pay(ctx, k) {
-        return None;
-    }
-    let tape = tape_for(ctx, k, &bx)?;
-    stats.affine_shadow_tries += 1;
-    Some(along_line(tape, (q, delta), (a, b), bx))
-}
-
-// What `tape`'s second-order form along the points `o + t·d` proves over
-// the piece `t ∈ (a, b)`, whose box is `bx`.
-fn along_line(tape: &Tape, (o, d): (IBox, IBox), (a, b): (f64, f64), bx: IBox) -> AlongRay {
     let t = Interval::new(a, b);
     let v = quadratic_along(tape, o, d, t, bx);
     if proof::holds_no_surface(v.range) {
-        return AlongRay::Free;
+        return Some(AlongRay::Free);
     }
     let part = v
         .form
         .may_reach_zero()
         .and_then(|eps| along_parameter(t, eps));
-    part.map_or(AlongRay::Free, |p| AlongRay::Within(p.lo, p.hi))
+    Some(part.map_or(AlongRay::Free, |p| AlongRay::Within(p.lo, p.hi)))
 }

@@ -40,8 +40,8 @@ impl FreeSearch<'_, '_> {
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
         let st = &mut *self.st;
         self.maybe.retain(|&k| {
-            let line = (seg.q, seg.delta);
-            let along = affine::affine_along_segment(&tr.ctx, k, line, (a, c), bx, &mut st.stats);
+            let along = affine::affine_along_line(&tr.ctx, k, seg.q, seg.delta, (a, c), bx);
+            st.stats.affine_shadow_tries += u64::from(along.is_some());
             let (pa, pb) = match along {
                 None => (a, c),
                 Some(AlongRay::Free) => (f64::INFINITY, f64::NEG_INFINITY),

@@ -244,7 +244,8 @@ fn affine_narrows(
     }
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     cand.retain(|&k| {
-        let along = affine::affine_along_ray(&tr.ctx, k as usize, ray, (a, b), bx, &mut st.stats);
+        let along = affine::affine_along_line(&tr.ctx, k as usize, ray.o, ray.d, (a, b), bx);
+        st.stats.affine_ray_tries += u64::from(along.is_some());
         let (pa, pb) = match along {
             None => (a, b),
             Some(AlongRay::Free) => (f64::INFINITY, f64::NEG_INFINITY),
