@@ -60,10 +60,11 @@ fn write_err(path: &Path, e: impl std::fmt::Display) -> CliError {
     format!("cannot write {}: {e}", path.display()).into()
 }
 
-/// Creates (truncates) every `(path, layer)` file of a `size` image and
-/// writes its header (compressed as `compression` says), then runs `body` with a sink that appends a band to
-/// each file, then ends and flushes every file, so an I/O error anywhere
-/// (a full disk included) is returned, not lost in a drop.
+/// Creates (truncates) every `(path, layer)` file of a `size` image,
+/// compressed as `compression` says, and writes its header, then runs
+/// `body` with a sink that appends a band to each file, then ends and
+/// flushes every file, so an I/O error anywhere (a full disk included) is
+/// returned, not lost in a drop.
 pub fn write_pngs<R>(
     files: &[(&Path, Layer)],
     (width, height): (u32, u32),

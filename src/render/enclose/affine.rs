@@ -148,6 +148,17 @@ pub(crate) enum AlongRay {
     Within(f64, f64),
 }
 
+/// The part of the piece `(a, b)` where an object may have surface, by
+/// what its form along the line proved (`None`: no form, the whole
+/// piece); an empty part (lower end above the upper) where it has none.
+pub(crate) fn part_left(along: Option<AlongRay>, (a, b): (f64, f64)) -> (f64, f64) {
+    match along {
+        None => (a, b),
+        Some(AlongRay::Free) => (f64::INFINITY, f64::NEG_INFINITY),
+        Some(AlongRay::Within(pa, pb)) => (pa, pb),
+    }
+}
+
 /// Object `k`'s second-order form along the line `o + t·d` (a single
 /// ray, or a shadow segment: origin and direction anywhere in the boxes
 /// `o` and `d`) over the piece `t ∈ (a, b)`, whose box is `bx`, a

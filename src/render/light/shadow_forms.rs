@@ -5,7 +5,7 @@
 use super::{FreeSearch, Front};
 use crate::interval::boxes::IBox;
 use crate::render::Enclosure;
-use crate::render::enclose::affine::{self, AlongRay};
+use crate::render::enclose::affine;
 use crate::render::prune::scope::Scope;
 use crate::render::trace::sweep::Visit;
 
@@ -42,11 +42,7 @@ impl FreeSearch<'_, '_> {
         self.maybe.retain(|&k| {
             let along = affine::affine_along_line(&tr.ctx, k, seg.q, seg.delta, (a, c), bx);
             st.stats.affine_shadow_tries += u64::from(along.is_some());
-            let (pa, pb) = match along {
-                None => (a, c),
-                Some(AlongRay::Free) => (f64::INFINITY, f64::NEG_INFINITY),
-                Some(AlongRay::Within(pa, pb)) => (pa, pb),
-            };
+            let (pa, pb) = affine::part_left(along, (a, c));
             if along.is_some() {
                 st.stats.affine_shadow_wins += u64::from(pb - pa <= 0.5 * (c - a));
             }

@@ -246,11 +246,7 @@ fn affine_narrows(
     cand.retain(|&k| {
         let along = affine::affine_along_line(&tr.ctx, k as usize, ray.o, ray.d, (a, b), bx);
         st.stats.affine_ray_tries += u64::from(along.is_some());
-        let (pa, pb) = match along {
-            None => (a, b),
-            Some(AlongRay::Free) => (f64::INFINITY, f64::NEG_INFINITY),
-            Some(AlongRay::Within(pa, pb)) => (pa, pb),
-        };
+        let (pa, pb) = affine::part_left(along, (a, b));
         if along.is_some() {
             // A win: the object is dropped, or its part is at most half.
             // The policy counts drops only, per piece size: a try takes
