@@ -256,6 +256,10 @@ pub fn affine_binary<F: Form>(op: BinaryOp, a: &FormValue<F>, b: &FormValue<F>) 
     let (form, ulps) = match op {
         BinaryOp::Add => (a.form.add(&b.form), 1),
         BinaryOp::Sub => (a.form.sub(&b.form), 1),
+        // A product by an exact constant (an expanded polynomial's
+        // coefficients) scales the form: no cross terms to fold.
+        BinaryOp::Mul if exact_constant(&b.form) => (a.form.linear(b.form.centre(), 0.0, 0.0), 1),
+        BinaryOp::Mul if exact_constant(&a.form) => (b.form.linear(a.form.centre(), 0.0, 0.0), 1),
         BinaryOp::Mul => (a.form.mul(&b.form), 1),
         BinaryOp::Div if rb.lo > 0.0 || rb.hi < 0.0 => (a.form.mul(&chebyshev(b, &RECIP)), 1),
         // On a tie both operands are the same number: either form holds.
@@ -266,6 +270,11 @@ pub fn affine_binary<F: Form>(op: BinaryOp, a: &FormValue<F>, b: &FormValue<F>) 
         _ => fallback(),
     };
     finish(form, iv, ulps)
+}
+
+/// Whether `f` is one exact number: no noise terms and no error.
+fn exact_constant<F: Form>(f: &F) -> bool {
+    f.spread() == 0.0 && f.error() == 0.0
 }
 
 /// Affine rule of `powi(a, n)`.

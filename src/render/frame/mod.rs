@@ -4,6 +4,7 @@
 
 mod assemble;
 pub(crate) mod band;
+mod pipeline;
 pub(crate) mod subsample;
 
 use std::sync::Arc;
@@ -247,11 +248,8 @@ impl<'a> Frame<'a> {
             height: h,
             ..RenderStats::default()
         };
-        let total = tiles(w, h).len();
         let done = AtomicUsize::new(0);
         let mut output_ms = 0.0;
-        // The rows of tiles traced, not yet made bands and written.
-        let mut pending: Vec<(Vec<TileOut>, u32)> = Vec::new();
         let (opts, float, depth_range) = (&self.opts, self.float, self.depth_range);
         let cancelled = || self.cancelled();
         let mut emit =
@@ -268,85 +266,24 @@ impl<'a> Frame<'a> {
         // IAA's shadow-edge rule reads the base samples just outside a
         // row's tiles (`aa::Beside`), the next row's included: with IAA
         // the base render runs one row ahead, a row at a time. The other
-        // modes read none, and trace `STRIPE_ROWS` rows of tiles at once:
-        // a worker done with its share of a row takes tiles of the next
-        // instead of waiting for the row's slowest tile.
-        let look_ahead = matches!(self.aa, Aa::Iaa { .. });
-        let stripe = if look_ahead {
-            1
+        // modes read none: their tiles run through `stream_rows` without a
+        // barrier, `STRIPE_ROWS` rows (and as many more waiting to be
+        // written) at most.
+        if !matches!(self.aa, Aa::Iaa { .. }) {
+            let ahead = 2 * (STRIPE_PIXELS / w as usize).clamp(1, STRIPE_ROWS);
+            self.stream_rows(ahead, &done, |outs, y0| -> Result<(), E> {
+                output_ms += emit(vec![(outs, y0)], &mut stats)?;
+                Ok(())
+            })?;
         } else {
-            (STRIPE_PIXELS / w as usize).clamp(1, STRIPE_ROWS)
-        };
-        let rows: Vec<u32> = (0..h).step_by(TILE as usize).collect();
-        let mut above: Vec<TileEdges> = Vec::new();
-        let mut current = look_ahead.then(|| self.pool.install(|| self.trace(&tile_row(w, h, 0))));
-        for (s, ys) in rows.chunks(stripe).enumerate() {
-            if self.cancelled() {
-                return Err(RenderError::Cancelled.into());
-            }
-            let (r, y0) = (s * stripe, ys[0]);
-            // Making and encoding the last bands overlaps tracing these
-            // rows: the sink is serial (one file, top to bottom), the
-            // tracing is not.
-            let (traced, written) = self.pool.install(|| {
-                rayon::join(
-                    || {
-                        if !look_ahead {
-                            return (self.trace_stripe(ys, &done, total), None, Vec::new());
-                        }
-                        let mut outs = current
-                            .take()
-                            .unwrap_or_else(|| self.trace(&tile_row(w, h, y0)));
-                        let next = rows.get(r + 1).map(|&y| self.trace(&tile_row(w, h, y)));
-                        let edges: Vec<TileEdges> = outs.iter().map(edges_of).collect();
-                        let below: Vec<TileEdges> =
-                            next.iter().flat_map(|n| n.iter().map(edges_of)).collect();
-                        let beside = |i: usize| NeighbourTiles {
-                            above: above.get(i),
-                            below: below.get(i),
-                            left: i.checked_sub(1).and_then(|k| edges.get(k)),
-                            right: edges.get(i + 1),
-                        };
-                        self.anti_alias_tiles(&mut outs, beside, &done, total);
-                        (vec![(outs, y0)], next, edges)
-                    },
-                    || emit(std::mem::take(&mut pending), &mut stats),
-                )
-            });
-            output_ms += written?;
-            let (outs, next, edges) = traced;
-            above = edges;
-            current = next;
-            self.release_groups_above(ys[ys.len() - 1] + TILE);
-            pending = outs;
+            output_ms += self.stream_look_ahead(&done, &mut emit, &mut stats)?;
         }
-        output_ms += emit(pending, &mut stats)?;
         if self.opts.progress && self.progress.is_none() {
             eprintln!();
         }
         stats.output_ms = output_ms;
         self.finish_times(&mut stats);
         Ok(stats)
-    }
-
-    // The rows of tiles starting at `ys`, traced together, each with its
-    // first image row.
-    fn trace_stripe(
-        &self,
-        ys: &[u32],
-        done: &AtomicUsize,
-        total: usize,
-    ) -> Vec<(Vec<TileOut>, u32)> {
-        let (w, h) = (self.opts.width, self.opts.height);
-        let rows: Vec<_> = ys.iter().map(|&y| tile_row(w, h, y)).collect();
-        let mut outs = self.trace(&rows.concat());
-        self.anti_alias_tiles(&mut outs, |_| NeighbourTiles::default(), done, total);
-        let mut stripe = Vec::with_capacity(ys.len());
-        for (row, &y) in rows.iter().zip(ys).rev() {
-            stripe.push((outs.split_off(outs.len() - row.len()), y));
-        }
-        stripe.reverse();
-        stripe
     }
 
     fn cancelled(&self) -> bool {
@@ -372,32 +309,34 @@ impl<'a> Frame<'a> {
     // Traces the base render of `tiles` in parallel (a `grid:N` render's
     // samples averaged); the results in the order of `tiles`.
     fn trace(&self, tiles: &[(u32, u32, u32, u32)]) -> Vec<TileOut> {
-        let s = self.aa.grid_factor();
-        let (tr, opts, bg) = (&self.tr, &self.opts, self.bg);
         self.pool.install(|| {
             tiles
                 .par_iter()
-                .map(|&(x0, y0, tw, th)| {
-                    if let Aa::Iaa { threshold, .. } = self.aa {
-                        return self.trace_classified((x0, y0, tw, th), threshold);
-                    }
-                    let spec = TileSpec {
-                        x0: x0 * s,
-                        y0: y0 * s,
-                        w: tw * s,
-                        h: th * s,
-                        mask: None,
-                        floors: None,
-                        shadow_hints: None,
-                        brackets: None,
-                        mean_value: true,
-                        rays_from_floors: false,
-                    };
-                    let out = render_tile(tr, opts, spec, bg);
-                    if s > 1 { downsample(out, s) } else { out }
-                })
+                .map(|&tile| self.trace_tile(tile))
                 .collect()
         })
+    }
+
+    // The base render of one tile (x0, y0, w, h).
+    fn trace_tile(&self, (x0, y0, tw, th): (u32, u32, u32, u32)) -> TileOut {
+        if let Aa::Iaa { threshold, .. } = self.aa {
+            return self.trace_classified((x0, y0, tw, th), threshold);
+        }
+        let s = self.aa.grid_factor();
+        let spec = TileSpec {
+            x0: x0 * s,
+            y0: y0 * s,
+            w: tw * s,
+            h: th * s,
+            mask: None,
+            floors: None,
+            shadow_hints: None,
+            brackets: None,
+            mean_value: true,
+            rays_from_floors: false,
+        };
+        let out = render_tile(&self.tr, &self.opts, spec, self.bg);
+        if s > 1 { downsample(out, s) } else { out }
     }
 
     // IAA's base render of one tile (`area`: x0, y0, w, h): the
@@ -441,18 +380,30 @@ impl<'a> Frame<'a> {
         done: &AtomicUsize,
         total: usize,
     ) {
-        let (tr, opts, bg) = (&self.tr, &self.opts, self.bg);
         self.pool.install(|| {
-            outs.par_iter_mut().enumerate().for_each(|(i, out)| {
-                anti_alias(tr, self.fine.as_ref(), opts, self.aa, out, beside(i), bg);
-                let n = done.fetch_add(1, Ordering::Relaxed) + 1;
-                if let Some(report) = &self.progress {
-                    report(n, total);
-                } else if opts.progress {
-                    eprint!("\rrendering: {n}/{total} tiles");
-                }
-            })
+            outs.par_iter_mut()
+                .enumerate()
+                .for_each(|(i, out)| self.anti_alias_one(out, beside(i), done, total))
         })
+    }
+
+    // Anti-aliases one traced tile (`beside`: the base samples around it)
+    // and reports progress.
+    fn anti_alias_one(
+        &self,
+        out: &mut TileOut,
+        beside: NeighbourTiles<'_>,
+        done: &AtomicUsize,
+        total: usize,
+    ) {
+        let (tr, opts, bg) = (&self.tr, &self.opts, self.bg);
+        anti_alias(tr, self.fine.as_ref(), opts, self.aa, out, beside, bg);
+        let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+        if let Some(report) = &self.progress {
+            report(n, total);
+        } else if opts.progress {
+            eprint!("\rrendering: {n}/{total} tiles");
+        }
     }
 
     // Sets the render-wide times: native code compiles lazily, on an
