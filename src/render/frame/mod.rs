@@ -31,15 +31,16 @@ use crate::scene::Scene;
 mod iaa;
 use iaa::{anti_alias, edges_of};
 
-/// Rows of tiles [`Frame::stream`] traces at once outside IAA: at one, a
-/// worker idled at the end of each row while another finished the row's
-/// slowest tile. Each row held costs about 2 MB at 1024 pixels wide, so
-/// wider images take fewer (at most [`STRIPE_PIXELS`] pixels across the
-/// rows together, one row at least).
-const STRIPE_ROWS: usize = 4;
+/// Rows of tiles [`Frame::stream`]'s base renders run ahead of the first
+/// row not yet handed to the sink, outside IAA: room for workers done with
+/// a row to take tiles further on while its slowest tile finishes. Each
+/// row held costs about 2 MB at 1024 pixels wide, so wider images hold
+/// fewer (at most [`AHEAD_PIXELS`] pixels across the rows together, one
+/// row at least).
+const AHEAD_ROWS: usize = 8;
 
-/// Image width times rows of tiles that a stripe holds at most.
-const STRIPE_PIXELS: usize = 16384;
+/// Image width times rows of tiles that the rows ahead hold at most.
+const AHEAD_PIXELS: usize = 32768;
 
 /// Renders `scene` with one evaluator per object (same order):
 /// `evaluators[i]` evaluates `scene.objects[i].function` (the renderer
@@ -227,17 +228,16 @@ impl<'a> Frame<'a> {
         out
     }
 
-    /// Traces one row of tiles at a time (the row's tiles in parallel) and
-    /// hands each finished band of image rows to `sink`, top to bottom, so
-    /// memory holds a row of tiles (two with IAA, whose base render runs a
-    /// row ahead) and two bands, not the image. `sink`
-    /// runs on a worker of the render's pool while the next row is traced.
+    /// Traces the tiles in image order, workers taking the next tile as
+    /// they free up ([`pipeline`]), and hands each finished band of image
+    /// rows to `sink`, top to bottom, so memory holds a few rows of tiles
+    /// ([`AHEAD_ROWS`] at most; three with IAA, whose rule reads the next
+    /// row's base samples) and a band, not the image. `sink` runs on the
+    /// worker that finished the band's last tile while the others trace on.
     /// Returns the counters (the same as [`Frame::render`]'s); its
     /// `output_ms` includes the time spent in `sink`. Stops at the first
     /// error of `sink`, or once the cancel flag is set
     /// ([`Frame::with_cancel`]).
-    // long-fn: the row-by-row pipeline (trace a row ahead, anti-alias,
-    // band, hand to the sink) shares one scope of borrows across rows.
     pub fn stream<E: Send + From<RenderError>>(
         self,
         mut sink: impl FnMut(&Band) -> Result<(), E> + Send,
@@ -251,33 +251,22 @@ impl<'a> Frame<'a> {
         let done = AtomicUsize::new(0);
         let mut output_ms = 0.0;
         let (opts, float, depth_range) = (&self.opts, self.float, self.depth_range);
-        let cancelled = || self.cancelled();
-        let mut emit =
-            |rows: Vec<(Vec<TileOut>, u32)>, stats: &mut RenderStats| -> Result<f64, E> {
-                let t0 = Instant::now();
-                for (outs, y0) in rows {
-                    if cancelled() {
-                        return Err(RenderError::Cancelled.into());
-                    }
-                    sink(&band(&outs, opts, float, y0, depth_range, stats))?;
-                }
-                Ok(ms_since(t0))
-            };
         // IAA's shadow-edge rule reads the base samples just outside a
-        // row's tiles (`aa::Beside`), the next row's included: with IAA
-        // the base render runs one row ahead, a row at a time. The other
-        // modes read none: their tiles run through `stream_rows` without a
-        // barrier, `STRIPE_ROWS` rows (and as many more waiting to be
-        // written) at most.
-        if !matches!(self.aa, Aa::Iaa { .. }) {
-            let ahead = 2 * (STRIPE_PIXELS / w as usize).clamp(1, STRIPE_ROWS);
-            self.stream_rows(ahead, &done, |outs, y0| -> Result<(), E> {
-                output_ms += emit(vec![(outs, y0)], &mut stats)?;
-                Ok(())
-            })?;
-        } else {
-            output_ms += self.stream_look_ahead(&done, &mut emit, &mut stats)?;
-        }
+        // tile (`aa::NeighbourTiles`), the next row's included: its base
+        // renders run at most a row past the next row's.
+        let ahead = match self.aa {
+            Aa::Iaa { .. } => 3,
+            _ => (AHEAD_PIXELS / w as usize).clamp(1, AHEAD_ROWS),
+        };
+        self.stream_rows(ahead, &done, |outs, y0| -> Result<(), E> {
+            if self.cancelled() {
+                return Err(RenderError::Cancelled.into());
+            }
+            let t0 = Instant::now();
+            sink(&band(&outs, opts, float, y0, depth_range, &mut stats))?;
+            output_ms += ms_since(t0);
+            Ok(())
+        })?;
         if self.opts.progress && self.progress.is_none() {
             eprintln!();
         }

@@ -1,50 +1,132 @@
-//! The streamed render's rows of tiles. Outside IAA they are traced
-//! without a barrier ([`Frame::stream_rows`]):
-//! every worker takes the next tile in image order, and whichever worker
-//! finishes the last missing tile of the next row hands the finished rows
-//! to the sink, in order, while the others trace on.
+//! The streamed render's tiles, traced without a barrier
+//! ([`Frame::stream_rows`]): every worker takes the next job in image
+//! order, and whichever worker finishes the last missing tile of the next
+//! row hands the finished rows to the sink, in order, while the others
+//! work on. A tile's jobs are its base render and its anti-aliasing; IAA's
+//! reads the base samples just outside the tile (`aa::NeighbourTiles`), so
+//! it waits for the four neighbours' base renders, and meanwhile workers
+//! take base renders further on.
 //!
-//! It replaced stripes of four rows traced as one parallel pass, each
-//! waiting for its slowest tile (and anti-aliased in a second pass):
-//! at 16 threads a stripe of a 1024-wide image is eight tiles a worker,
-//! and a slow tile (shadows, a cluster of objects) left the others idle.
+//! It replaced stripes of rows traced as one parallel pass each, every
+//! stripe waiting for its slowest tile and anti-aliased in a second pass
+//! (IAA a row at a time): at 16 threads a four-row stripe of a 1024-wide
+//! image is eight tiles a worker, and a slow tile (shadows, a cluster of
+//! objects) left the others idle.
 
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Condvar, Mutex, MutexGuard, PoisonError};
+use std::sync::atomic::AtomicUsize;
+use std::sync::{Arc, Condvar, Mutex, MutexGuard, PoisonError};
 
-use super::{Frame, edges_of, tile_row};
-use crate::render::aa::{NeighbourTiles, TileEdges};
-use crate::render::context::stats::RenderStats;
+use super::{Frame, edges_of};
+use crate::render::aa::{Aa, NeighbourTiles, TileEdges};
 use crate::render::tile::TileOut;
 use crate::render::{RenderError, TILE};
 
-/// The tiles traced and not yet handed on, and how far the hand-over is.
+/// Where one tile stands.
+enum Slot {
+    /// Not traced yet (or handed on).
+    Empty,
+    /// Base render done, waiting for its anti-aliasing (IAA).
+    Base(TileOut),
+    /// Being anti-aliased.
+    Busy,
+    /// Finished, waiting for its row to be handed on.
+    Done(TileOut),
+}
+
+/// The tiles in flight and how far each stage is.
 struct Shelf {
     /// One slot per tile of the image, in image order.
-    tiles: Vec<Option<TileOut>>,
+    slots: Vec<Slot>,
+    /// The base samples on each tile's sides, once its base render is
+    /// done (IAA only).
+    edges: Vec<Option<Arc<TileEdges>>>,
+    /// The next tile whose base render is to start.
+    next_base: usize,
+    /// The next tile whose anti-aliasing is to start (IAA only).
+    next_aa: usize,
     /// Rows of tiles handed on.
     rows_out: usize,
     /// The sink failed or the render was cancelled: workers stop.
     stop: bool,
 }
 
+/// A worker's next job.
+enum Job {
+    /// The base render of tile `i` (and, outside IAA, its anti-aliasing).
+    Base(usize),
+    /// IAA on tile `i`'s base render, with its neighbours' sides.
+    Aa(usize, TileOut, [Option<Arc<TileEdges>>; 4]),
+}
+
 impl Shelf {
     /// Takes out the next row to hand on (`per_row` tiles) and its index,
-    /// if all of it is traced.
+    /// if all of it is finished.
     fn take_next_row(&mut self, per_row: usize) -> Option<(usize, Vec<TileOut>)> {
-        let r = self.rows_out;
-        let row = self.tiles.get_mut(r * per_row..(r + 1) * per_row)?;
-        if self.stop || row.iter().any(Option::is_none) {
+        if !self.next_row_ready(per_row) {
             return None;
         }
-        Some((r, row.iter_mut().filter_map(Option::take).collect()))
+        let r = self.rows_out;
+        let row = &mut self.slots[r * per_row..(r + 1) * per_row];
+        let outs = row
+            .iter_mut()
+            .map(|s| match std::mem::replace(s, Slot::Empty) {
+                Slot::Done(out) => out,
+                _ => unreachable!("a ready row holds finished tiles"),
+            });
+        Some((r, outs.collect()))
     }
 
-    /// Whether the next row to hand on is all traced.
+    /// Whether the next row to hand on is all finished.
     fn next_row_ready(&self, per_row: usize) -> bool {
         let r = self.rows_out;
-        let row = self.tiles.get(r * per_row..(r + 1) * per_row);
-        !self.stop && row.is_some_and(|row| row.iter().all(Option::is_some))
+        let row = self.slots.get(r * per_row..(r + 1) * per_row);
+        !self.stop && row.is_some_and(|row| row.iter().all(|s| matches!(s, Slot::Done(_))))
+    }
+
+    /// Tile `i`'s neighbours above, below, left and right, in a grid of
+    /// `per_row` columns, where they exist.
+    fn neighbours(&self, i: usize, per_row: usize) -> [Option<usize>; 4] {
+        let n = self.slots.len();
+        let col = i % per_row;
+        [
+            i.checked_sub(per_row),
+            (i + per_row < n).then_some(i + per_row),
+            (col > 0).then(|| i - 1),
+            (col + 1 < per_row && i + 1 < n).then_some(i + 1),
+        ]
+    }
+
+    /// The next job, if one can start: the next tile's IAA once its
+    /// neighbours' base renders are done, else the next base render
+    /// within `ahead` rows of the first row not handed on (the first such
+    /// row is never held back, so a worker on it always moves). `Err`
+    /// once nothing is left to start.
+    fn next_job(&mut self, per_row: usize, ahead: usize, iaa: bool) -> Result<Option<Job>, ()> {
+        let n = self.slots.len();
+        if self.stop {
+            return Err(());
+        }
+        let i = self.next_aa;
+        if iaa && i < n && matches!(self.slots[i], Slot::Base(_)) {
+            let near = self.neighbours(i, per_row);
+            if near.iter().flatten().all(|&j| self.edges[j].is_some()) {
+                let Slot::Base(out) = std::mem::replace(&mut self.slots[i], Slot::Busy) else {
+                    unreachable!("matched above");
+                };
+                self.next_aa += 1;
+                let sides = near.map(|j| j.and_then(|j| self.edges[j].clone()));
+                return Ok(Some(Job::Aa(i, out, sides)));
+            }
+        }
+        let b = self.next_base;
+        if b < n && b / per_row < self.rows_out + ahead {
+            self.next_base += 1;
+            return Ok(Some(Job::Base(b)));
+        }
+        if b >= n && (!iaa || self.next_aa >= n) {
+            return Err(());
+        }
+        Ok(None)
     }
 }
 
@@ -61,7 +143,8 @@ struct Handover<'t, F, E> {
     tiles: &'t [(u32, u32, u32, u32)],
     per_row: usize,
     shelf: Mutex<Shelf>,
-    /// Signalled whenever the shelf's `rows_out` or `stop` changes.
+    /// Signalled whenever a job may have become ready: a base render
+    /// done, a row handed on, the workers stopped.
     moved: Condvar,
     emitter: Mutex<Emitter<F, E>>,
 }
@@ -74,15 +157,27 @@ impl<F, E> Handover<'_, F, E>
 where
     F: FnMut(Vec<TileOut>, u32) -> Result<(), E>,
 {
-    /// Waits until tile `i` lies within `ahead` rows of the first row not
-    /// handed on; false once the workers are to stop. The first row not
-    /// handed on is never waited for, so a worker on it always moves.
-    fn wait_for_room(&self, i: usize, ahead: usize) -> bool {
+    /// Waits for the next job; None once there is none left (or the
+    /// workers are to stop).
+    fn wait_for_job(&self, ahead: usize, iaa: bool) -> Option<Job> {
         let mut s = lock(&self.shelf);
-        while !s.stop && i / self.per_row >= s.rows_out + ahead {
-            s = self.moved.wait(s).unwrap_or_else(PoisonError::into_inner);
+        loop {
+            match s.next_job(self.per_row, ahead, iaa) {
+                Ok(Some(job)) => return Some(job),
+                Ok(None) => s = self.moved.wait(s).unwrap_or_else(PoisonError::into_inner),
+                Err(()) => return None,
+            }
         }
-        !s.stop
+    }
+
+    /// Stores what a job made and wakes the waiting workers.
+    fn put(&self, i: usize, slot: Slot, edges: Option<TileEdges>) {
+        let mut s = lock(&self.shelf);
+        s.slots[i] = slot;
+        if let Some(e) = edges {
+            s.edges[i] = Some(Arc::new(e));
+        }
+        self.moved.notify_all();
     }
 
     /// Records the render's first error and stops the workers.
@@ -107,6 +202,11 @@ where
                 frame.release_groups_above(y0 + TILE);
                 let mut s = lock(&self.shelf);
                 s.rows_out += 1;
+                // The edges above the rows still to be anti-aliased are
+                // read no more.
+                for e in &mut s.edges[r.saturating_sub(1) * per_row..r * per_row] {
+                    *e = None;
+                }
                 if let Err(e) = handed {
                     em.error.get_or_insert(e);
                     s.stop = true;
@@ -122,10 +222,11 @@ where
 }
 
 impl Frame<'_> {
-    /// Traces every tile (outside IAA) and anti-aliases it, and calls
-    /// `on_row(tiles, y0)` with each row of tiles, top to bottom, once all
-    /// of it is traced. Workers run at most `ahead` rows of tiles past the
-    /// first row not yet handed on, so memory holds that many rows.
+    /// Traces every tile and anti-aliases it, and calls `on_row(tiles,
+    /// y0)` with each row of tiles, top to bottom, once all of it is
+    /// finished. Base renders run at most `ahead` rows of tiles past the
+    /// first row not yet handed on (at least 2 with IAA, which reads the
+    /// next row's), so memory holds that many rows.
     pub(super) fn stream_rows<E: Send + From<RenderError>>(
         &self,
         ahead: usize,
@@ -134,11 +235,15 @@ impl Frame<'_> {
     ) -> Result<(), E> {
         let (w, h) = (self.opts.width, self.opts.height);
         let tiles = super::tiles(w, h);
+        let iaa = matches!(self.aa, Aa::Iaa { .. });
         let hand = Handover {
             tiles: &tiles,
             per_row: w.div_ceil(TILE) as usize,
             shelf: Mutex::new(Shelf {
-                tiles: (0..tiles.len()).map(|_| None).collect(),
+                slots: (0..tiles.len()).map(|_| Slot::Empty).collect(),
+                edges: vec![None; tiles.len()],
+                next_base: 0,
+                next_aa: 0,
                 rows_out: 0,
                 stop: false,
             }),
@@ -148,21 +253,38 @@ impl Frame<'_> {
                 error: None,
             }),
         };
-        let next = AtomicUsize::new(0);
+        let ahead = if iaa { ahead.max(2) } else { ahead.max(1) };
         self.pool.broadcast(|_| {
-            loop {
-                let i = next.fetch_add(1, Ordering::Relaxed);
-                if i >= tiles.len() || !hand.wait_for_room(i, ahead) {
-                    break;
-                }
+            while let Some(job) = hand.wait_for_job(ahead, iaa) {
                 if self.cancelled() {
                     hand.fail(RenderError::Cancelled.into());
                     break;
                 }
-                let mut out = self.trace_tile(tiles[i]);
-                self.anti_alias_one(&mut out, NeighbourTiles::default(), done, tiles.len());
-                lock(&hand.shelf).tiles[i] = Some(out);
-                hand.drain(self);
+                match job {
+                    Job::Base(i) if iaa => {
+                        let out = self.trace_tile(tiles[i]);
+                        let sides = edges_of(&out);
+                        hand.put(i, Slot::Base(out), Some(sides));
+                    }
+                    Job::Base(i) => {
+                        let mut out = self.trace_tile(tiles[i]);
+                        self.anti_alias_one(&mut out, NeighbourTiles::default(), done, tiles.len());
+                        hand.put(i, Slot::Done(out), None);
+                        hand.drain(self);
+                    }
+                    Job::Aa(i, mut out, sides) => {
+                        let [above, below, left, right] = sides.each_ref().map(Option::as_deref);
+                        let beside = NeighbourTiles {
+                            above,
+                            below,
+                            left,
+                            right,
+                        };
+                        self.anti_alias_one(&mut out, beside, done, tiles.len());
+                        hand.put(i, Slot::Done(out), None);
+                        hand.drain(self);
+                    }
+                }
             }
         });
         let em = hand
@@ -184,66 +306,5 @@ impl Frame<'_> {
                 Ok(())
             }
         }
-    }
-}
-
-/// Hands rows of traced tiles to the bands and the sink: the time it
-/// took, ms.
-pub(super) type EmitRows<'a, E> =
-    dyn FnMut(Vec<(Vec<TileOut>, u32)>, &mut RenderStats) -> Result<f64, E> + Send + 'a;
-
-impl Frame<'_> {
-    /// IAA's streamed render: the base render runs one row of tiles ahead
-    /// (the shadow-edge rule reads the next row's samples), a row at a
-    /// time, and each row is written while the next is traced. Returns
-    /// the time spent writing, ms.
-    pub(super) fn stream_look_ahead<E: Send + From<RenderError>>(
-        &self,
-        done: &AtomicUsize,
-        emit: &mut EmitRows<'_, E>,
-        stats: &mut RenderStats,
-    ) -> Result<f64, E> {
-        let (w, h) = (self.opts.width, self.opts.height);
-        let total = super::tiles(w, h).len();
-        let rows: Vec<u32> = (0..h).step_by(TILE as usize).collect();
-        let mut output_ms = 0.0;
-        // The row traced, not yet made a band and written.
-        let mut pending: Vec<(Vec<TileOut>, u32)> = Vec::new();
-        let mut above: Vec<TileEdges> = Vec::new();
-        let mut current = Some(self.pool.install(|| self.trace(&tile_row(w, h, 0))));
-        for (r, &y0) in rows.iter().enumerate() {
-            if self.cancelled() {
-                return Err(RenderError::Cancelled.into());
-            }
-            let (traced, written) = self.pool.install(|| {
-                rayon::join(
-                    || {
-                        let mut outs = current
-                            .take()
-                            .unwrap_or_else(|| self.trace(&tile_row(w, h, y0)));
-                        let next = rows.get(r + 1).map(|&y| self.trace(&tile_row(w, h, y)));
-                        let edges: Vec<TileEdges> = outs.iter().map(edges_of).collect();
-                        let below: Vec<TileEdges> =
-                            next.iter().flat_map(|n| n.iter().map(edges_of)).collect();
-                        let beside = |i: usize| NeighbourTiles {
-                            above: above.get(i),
-                            below: below.get(i),
-                            left: i.checked_sub(1).and_then(|k| edges.get(k)),
-                            right: edges.get(i + 1),
-                        };
-                        self.anti_alias_tiles(&mut outs, beside, done, total);
-                        ((outs, y0), next, edges)
-                    },
-                    || emit(std::mem::take(&mut pending), stats),
-                )
-            });
-            output_ms += written?;
-            let (row, next, edges) = traced;
-            above = edges;
-            current = next;
-            self.release_groups_above(y0 + TILE);
-            pending = vec![row];
-        }
-        Ok(output_ms + emit(pending, stats)?)
     }
 }
