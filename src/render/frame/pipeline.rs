@@ -21,16 +21,17 @@ use crate::render::aa::{Aa, NeighbourTiles, TileEdges};
 use crate::render::tile::TileOut;
 use crate::render::{RenderError, TILE};
 
-/// Where one tile stands.
+/// Where one tile stands (a tile's output boxed: the image's slots are
+/// held from the start).
 enum Slot {
     /// Not traced yet (or handed on).
     Empty,
     /// Base render done, waiting for its anti-aliasing (IAA).
-    Base(TileOut),
+    Base(Box<TileOut>),
     /// Being anti-aliased.
     Busy,
     /// Finished, waiting for its row to be handed on.
-    Done(TileOut),
+    Done(Box<TileOut>),
 }
 
 /// The tiles in flight and how far each stage is.
@@ -55,7 +56,7 @@ enum Job {
     /// The base render of tile `i` (and, outside IAA, its anti-aliasing).
     Base(usize),
     /// IAA on tile `i`'s base render, with its neighbours' sides.
-    Aa(usize, TileOut, [Option<Arc<TileEdges>>; 4]),
+    Aa(usize, Box<TileOut>, [Option<Arc<TileEdges>>; 4]),
 }
 
 impl Shelf {
@@ -70,7 +71,7 @@ impl Shelf {
         let outs = row
             .iter_mut()
             .map(|s| match std::mem::replace(s, Slot::Empty) {
-                Slot::Done(out) => out,
+                Slot::Done(out) => *out,
                 _ => unreachable!("a ready row holds finished tiles"),
             });
         Some((r, outs.collect()))
@@ -264,12 +265,12 @@ impl Frame<'_> {
                     Job::Base(i) if iaa => {
                         let out = self.trace_tile(tiles[i]);
                         let sides = edges_of(&out);
-                        hand.put(i, Slot::Base(out), Some(sides));
+                        hand.put(i, Slot::Base(Box::new(out)), Some(sides));
                     }
                     Job::Base(i) => {
                         let mut out = self.trace_tile(tiles[i]);
                         self.anti_alias_one(&mut out, NeighbourTiles::default(), done, tiles.len());
-                        hand.put(i, Slot::Done(out), None);
+                        hand.put(i, Slot::Done(Box::new(out)), None);
                         hand.drain(self);
                     }
                     Job::Aa(i, mut out, sides) => {
