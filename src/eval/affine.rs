@@ -25,9 +25,10 @@ use crate::eval::taped::TapeEvaluator;
 use crate::interval::Interval;
 use crate::interval::affine::meet;
 use crate::interval::form::Form;
+use crate::interval::quadratic::Quadratic;
 use crate::ir::affine_rules::{
     AffineValue, FormValue, QuadraticValue, affine_binary, affine_powi, affine_powi_sharing,
-    affine_unary, run_affine,
+    affine_unary, run_affine, tightened,
 };
 use crate::ir::{BinaryOp, UnaryOp};
 
@@ -67,8 +68,10 @@ thread_local! {
     static SCRATCH: RefCell<Vec<AffineValue>> = const { RefCell::new(Vec::new()) };
     // The same for forms along a ray (`affine_along`).
     static SCRATCH_ALONG: RefCell<Vec<AffineValue<1>>> = const { RefCell::new(Vec::new()) };
-    // The same for second-order forms along a ray (`quadratic_along`).
-    static SCRATCH_QUADRATIC: RefCell<Vec<QuadraticValue>> = const { RefCell::new(Vec::new()) };
+    // The same for second-order forms along a ray (`quadratic_along`),
+    // and the squares its powers share (see `run_tape`).
+    static SCRATCH_QUADRATIC: RefCell<(Vec<QuadraticValue>, Vec<Quadratic>)> =
+        const { RefCell::new((Vec::new(), Vec::new())) };
 }
 
 /// f's affine form along the ray `o + d·t` (origin and direction anywhere
@@ -87,7 +90,7 @@ pub fn affine_along(
     sides: [Interval; 3],
 ) -> AffineValue<1> {
     SCRATCH_ALONG.with_borrow_mut(|m| {
-        run_tape(tape, m, |v| {
+        run_tape(tape, m, &mut Vec::new(), |v| {
             AffineValue::along(o[v], d[v], t_range, sides[v])
         })
     })
@@ -108,18 +111,20 @@ pub fn quadratic_along(
     t_range: Interval,
     sides: [Interval; 3],
 ) -> QuadraticValue {
-    SCRATCH_QUADRATIC.with_borrow_mut(|m| {
-        run_tape(tape, m, |v| {
+    SCRATCH_QUADRATIC.with_borrow_mut(|(m, squares)| {
+        run_tape(tape, m, squares, |v| {
             QuadraticValue::along(o[v], d[v], t_range, sides[v])
         })
     })
 }
 
 /// The root's value of `tape` run over the registers `m` (grown to fit),
-/// `var` giving each coordinate's value.
+/// `var` giving each coordinate's value; `squares` is room for the
+/// squares that powers share (a first-order form keeps none).
 fn run_tape<F: Form>(
     tape: &Tape,
     m: &mut Vec<FormValue<F>>,
+    squares: &mut Vec<F>,
     var: impl Fn(usize) -> FormValue<F>,
 ) -> FormValue<F> {
     if m.len() < tape.registers() {
@@ -128,7 +133,8 @@ fn run_tape<F: Form>(
     // The squares of the form in one register, which the powers reading
     // it share (an expanded polynomial raises one value to every power),
     // while that register keeps the value; the same bits as without.
-    let (mut shared, mut squares) = (None::<Reg>, Vec::new());
+    let mut shared = None::<Reg>;
+    squares.clear();
     for &instr in tape.code() {
         let (o, v) = match instr {
             Instr::Powi(o, a, n) => {
@@ -136,7 +142,7 @@ fn run_tape<F: Form>(
                     shared = Some(a);
                     squares.clear();
                 }
-                (o, affine_powi_sharing(&m[a as usize], n, &mut squares))
+                (o, affine_powi_sharing(&m[a as usize], n, squares))
             }
             _ => step(instr, &var, |r| m[r as usize]),
         };
@@ -145,7 +151,7 @@ fn run_tape<F: Form>(
         }
         m[o as usize] = v;
     }
-    m[root(tape)]
+    tightened(&m[root(tape)])
 }
 
 impl AffineEvaluator for Interpreter {
@@ -196,7 +202,8 @@ fn root(tape: &Tape) -> usize {
 
 impl AffineEvaluator for Tape {
     fn affine_value(&self, b: [Interval; 3]) -> AffineValue {
-        SCRATCH.with_borrow_mut(|m| run_tape(self, m, |v| AffineValue::var(b[v], v)))
+        SCRATCH
+            .with_borrow_mut(|m| run_tape(self, m, &mut Vec::new(), |v| AffineValue::var(b[v], v)))
     }
 
     fn affine(&self, b: [Interval; 3]) -> Interval {

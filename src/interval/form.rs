@@ -20,6 +20,10 @@ use super::affine::Affine;
 pub trait Form: Copy + std::fmt::Debug + PartialEq {
     /// The form that encloses every value.
     const UNBOUNDED: Self;
+    /// Whether every op's interval is met with its form's range, or only
+    /// where a rule reads its operands' ranges, and at the root (see
+    /// `ir::affine_rules`, "The value each op carries").
+    const MEET_EACH_OP: bool = true;
     /// The exact constant `v` (UNBOUNDED where not finite).
     fn constant(v: f64) -> Self;
     /// The interval `i` as a constant plus error (UNBOUNDED where it is

@@ -14,6 +14,11 @@
 //! linearisation is taken over) read the tightest range known; and an op
 //! with no affine rule converts that interval back into a form.
 //!
+//! The second-order form ([`Form::MEET_EACH_OP`] false) meets them only
+//! where a rule reads the range, and at the root ([`tightened`]): after
+//! `+`, `-`, `*`, `neg`, squares and powers by products its value carries
+//! the interval rule's result alone.
+//!
 //! # Rules
 //! - Exact: `neg`, `+`, `-`, `min`/`max` decided by the ranges, `abs` of
 //!   an operand of one sign, `powi(_, 0 | 1)`.
@@ -184,9 +189,30 @@ fn finish<F: Form>(form: F, iv: Interval, ulps: u32) -> FormValue<F> {
         }
     }
     let form = form.with_error(e);
+    if !F::MEET_EACH_OP {
+        return FormValue { form, range: iv };
+    }
     match meet(iv, form.range_within(reach)) {
         Some(range) => FormValue { form, range },
         None => plain(),
+    }
+}
+
+/// `v`'s interval met with its form's range, as [`finish`] meets every
+/// op's (where they do not meet, the interval alone, as there).
+pub fn tightened<F: Form>(v: &FormValue<F>) -> FormValue<F> {
+    if F::MEET_EACH_OP || v.is_empty() || !v.form.is_bounded() {
+        return *v;
+    }
+    match meet(v.range, v.form.range_within(v.form.spread())) {
+        Some(range) => FormValue {
+            form: v.form,
+            range,
+        },
+        None => FormValue {
+            form: F::from_interval(v.range),
+            range: v.range,
+        },
     }
 }
 
@@ -197,6 +223,14 @@ fn fallback<F: Form>() -> (F, u32) {
 
 /// Affine rule of a one-operand op.
 pub fn affine_unary<F: Form>(op: UnaryOp, a: &FormValue<F>) -> FormValue<F> {
+    let held;
+    let a = match op {
+        UnaryOp::Neg | UnaryOp::Square => a,
+        _ => {
+            held = tightened(a);
+            &held
+        }
+    };
     let iv = interval_unary(op, a.range);
     if iv.is_empty() {
         return FormValue::EMPTY;
@@ -248,6 +282,14 @@ fn derivative(op: UnaryOp, i: Interval) -> Interval {
 
 /// Affine rule of a two-operand op.
 pub fn affine_binary<F: Form>(op: BinaryOp, a: &FormValue<F>, b: &FormValue<F>) -> FormValue<F> {
+    let held;
+    let (a, b) = match op {
+        BinaryOp::Add | BinaryOp::Sub | BinaryOp::Mul => (a, b),
+        _ => {
+            held = [tightened(a), tightened(b)];
+            (&held[0], &held[1])
+        }
+    };
     let iv = interval_binary(op, a.range, b.range);
     if iv.is_empty() {
         return FormValue::EMPTY;
@@ -300,6 +342,12 @@ pub fn affine_powi_sharing<F: Form>(
     {
         let ulps = 2 * (32 - n.unsigned_abs().leading_zeros()) + 1;
         return finish(p, iv, ulps);
+    }
+    let held = tightened(a);
+    let a = &held;
+    let iv = if F::MEET_EACH_OP { iv } else { a.range.powi(n) };
+    if iv.is_empty() {
+        return FormValue::EMPTY;
     }
     let r = a.range;
     // The point rule's products (binary powering) and its division.
