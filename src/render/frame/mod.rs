@@ -81,8 +81,8 @@ impl<'a> FinerScopes<'a> {
 }
 
 /// A render whose scene, evaluators and options have been checked, ready
-/// to trace: whole into memory ([`Frame::render`]) or one row of tiles at
-/// a time ([`Frame::stream`]), with the same pixels and counters.
+/// to trace: whole into memory ([`Frame::render`]) or streamed in bands
+/// of rows ([`Frame::stream`]), with the same pixels and counters.
 pub struct Frame<'a> {
     evaluators: &'a [Arc<dyn Evaluator>],
     opts: RenderOptions,
