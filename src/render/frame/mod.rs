@@ -312,18 +312,7 @@ impl<'a> Frame<'a> {
             return self.trace_classified((x0, y0, tw, th), threshold);
         }
         let s = self.aa.grid_factor();
-        let spec = TileSpec {
-            x0: x0 * s,
-            y0: y0 * s,
-            w: tw * s,
-            h: th * s,
-            mask: None,
-            floors: None,
-            shadow_hints: None,
-            brackets: None,
-            mean_value: true,
-            rays_from_floors: false,
-        };
+        let spec = TileSpec::plain(x0 * s, y0 * s, tw * s, th * s);
         let out = render_tile(&self.tr, &self.opts, spec, self.bg);
         if s > 1 { downsample(out, s) } else { out }
     }

@@ -67,6 +67,25 @@ pub(crate) struct TileSpec<'m> {
     pub rays_from_floors: bool,
 }
 
+impl TileSpec<'static> {
+    /// The `w`×`h` tile at (`x0`, `y0`), every pixel traced from its clip
+    /// start, blocks free to try the mean-value form.
+    pub(crate) fn plain(x0: u32, y0: u32, w: u32, h: u32) -> TileSpec<'static> {
+        TileSpec {
+            x0,
+            y0,
+            w,
+            h,
+            mask: None,
+            floors: None,
+            shadow_hints: None,
+            brackets: None,
+            mean_value: true,
+            rays_from_floors: false,
+        }
+    }
+}
+
 /// The shadow state of a nearby sample that a sample may reuse: IAA's
 /// sub-samples take their pixel's base sample's (see
 /// `aa::SHADOW_REUSE_REACH`).

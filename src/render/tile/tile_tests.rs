@@ -159,16 +159,5 @@ fn a_tile_without_the_mean_value_form_never_tries_it() {
 
 // The whole `size`² image as one tile.
 fn spec_of(size: u32) -> TileSpec<'static> {
-    TileSpec {
-        x0: 0,
-        y0: 0,
-        w: size,
-        h: size,
-        mask: None,
-        floors: None,
-        shadow_hints: None,
-        brackets: None,
-        mean_value: true,
-        rays_from_floors: false,
-    }
+    TileSpec::plain(0, 0, size, size)
 }
