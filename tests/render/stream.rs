@@ -191,6 +191,31 @@ fn a_failing_sink_stops_the_stream() {
     assert_eq!(calls, 2);
 }
 
+// A sink that panics (as a bug in a tile would) ends the stream with its
+// panic: the other workers, waiting for room past the rows never handed
+// on, are stopped rather than left waiting.
+#[test]
+fn a_panicking_sink_ends_the_stream_without_a_hang() {
+    let (done, finished) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let scene = sphere();
+        let ev = build_evaluators(&scene, EvalKind::Interp).unwrap();
+        let opts = RenderOptions {
+            threads: Some(4),
+            ..RenderOptions::new(40, 640)
+        };
+        let frame = Frame::new(&scene, &ev, &opts, Aa::None).unwrap();
+        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            frame.stream(|_| -> Result<(), RenderError> { panic!("a sink's bug") })
+        }));
+        done.send(r.is_err()).unwrap();
+    });
+    let panicked = finished
+        .recv_timeout(std::time::Duration::from_secs(60))
+        .expect("the stream hung after its sink panicked");
+    assert!(panicked);
+}
+
 #[test]
 fn a_cancelled_stream_stops_before_its_next_row() {
     let scene = sphere();

@@ -150,6 +150,20 @@ struct Handover<'t, F, E> {
     emitter: Mutex<Emitter<F, E>>,
 }
 
+/// Stops the other workers when the one holding it unwinds (a bug that
+/// panics in a tile), so that none waits for a tile that never comes;
+/// rayon then passes the panic on.
+struct StopOnUnwind<'h>(&'h Mutex<Shelf>, &'h Condvar);
+
+impl Drop for StopOnUnwind<'_> {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            lock(self.0).stop = true;
+            self.1.notify_all();
+        }
+    }
+}
+
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     m.lock().unwrap_or_else(PoisonError::into_inner)
 }
@@ -256,6 +270,7 @@ impl Frame<'_> {
         };
         let ahead = if iaa { ahead.max(2) } else { ahead.max(1) };
         self.pool.broadcast(|_| {
+            let _stop = StopOnUnwind(&hand.shelf, &hand.moved);
             while let Some(job) = hand.wait_for_job(ahead, iaa) {
                 if self.cancelled() {
                     hand.fail(RenderError::Cancelled.into());
