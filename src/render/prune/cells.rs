@@ -43,7 +43,7 @@ use crate::render::prune::scope::TileState;
 
 /// The finest level of cells.
 const MAX_LEVEL: u32 = 5;
-/// The finest level of the render's shared cells (at most 8^3 of them).
+/// The finest level of the render's shared cells (at most 16³ of them, 2^L a side).
 const SHARED_LEVEL: u32 = 4;
 /// Functions shorter than this are not pruned further down the tree.
 const CELL_MIN_OPS: usize = 2 * PRUNE_MIN_OPS;
