@@ -60,6 +60,18 @@ enum Job {
 }
 
 impl Shelf {
+    /// The shelf of an image of `n` tiles, nothing traced yet.
+    fn new(n: usize) -> Shelf {
+        Shelf {
+            slots: (0..n).map(|_| Slot::Empty).collect(),
+            edges: vec![None; n],
+            next_base: 0,
+            next_aa: 0,
+            rows_out: 0,
+            stop: false,
+        }
+    }
+
     /// Takes out the next row to hand on (`per_row` tiles) and its index,
     /// if all of it is finished.
     fn take_next_row(&mut self, per_row: usize) -> Option<(usize, Vec<TileOut>)> {
@@ -254,14 +266,7 @@ impl Frame<'_> {
         let hand = Handover {
             tiles: &tiles,
             per_row: w.div_ceil(TILE) as usize,
-            shelf: Mutex::new(Shelf {
-                slots: (0..tiles.len()).map(|_| Slot::Empty).collect(),
-                edges: vec![None; tiles.len()],
-                next_base: 0,
-                next_aa: 0,
-                rows_out: 0,
-                stop: false,
-            }),
+            shelf: Mutex::new(Shelf::new(tiles.len())),
             moved: Condvar::new(),
             emitter: Mutex::new(Emitter {
                 on_row,
