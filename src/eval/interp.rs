@@ -217,7 +217,7 @@ fn first<const S: usize>(d: [Option<Interval>; 3]) -> [Interval; S] {
 /// the same partial of the operands alone. The ops of distance fields are
 /// written out with the rules' own arithmetic; the rest go through the
 /// shared rules.
-#[inline]
+#[inline(always)]
 pub(crate) fn dual_unary<const S: usize>(op: UnaryOp, (a, x): IntervalDual<S>) -> IntervalDual<S> {
     match op {
         UnaryOp::Neg => (a.neg(), x.map(Interval::neg)),
@@ -230,15 +230,20 @@ pub(crate) fn dual_unary<const S: usize>(op: UnaryOp, (a, x): IntervalDual<S>) -
             let fp = Interval::point(0.5).div(v);
             (v, x.map(|x| chain(fp, x)))
         }
-        _ => {
-            let (v, d) = grad_unary(&mut Reference, op, (a, partials(x)));
-            (v, first(d))
-        }
+        _ => dual_unary_shared(op, (a, x)),
     }
 }
 
+/// [`dual_unary`] by the shared rules, out of line: the written-out ops
+/// inline where the op is known, and the rest cost a call.
+#[inline(never)]
+fn dual_unary_shared<const S: usize>(op: UnaryOp, (a, x): IntervalDual<S>) -> IntervalDual<S> {
+    let (v, d) = grad_unary(&mut Reference, op, (a, partials(x)));
+    (v, first(d))
+}
+
 /// `op(a, b)` and `S` partials (see [`dual_unary`]).
-#[inline]
+#[inline(always)]
 pub(crate) fn dual_binary<const S: usize>(
     op: BinaryOp,
     (a, x): IntervalDual<S>,
@@ -259,11 +264,20 @@ pub(crate) fn dual_binary<const S: usize>(
         BinaryOp::Mul => (a.mul(b), zip(x, y, |x, y| chain(b, x).add(chain(a, y)))),
         BinaryOp::Min => (a.min(b), zip(x, y, |x, y| Reference.min_grad(a, b, x, y))),
         BinaryOp::Max => (a.max(b), zip(x, y, |x, y| Reference.max_grad(a, b, x, y))),
-        _ => {
-            let (v, d) = grad_binary(&mut Reference, op, (a, partials(x)), (b, partials(y)));
-            (v, first(d))
-        }
+        _ => dual_binary_shared(op, (a, x), (b, y)),
     }
+}
+
+/// [`dual_binary`] by the shared rules, out of line (see
+/// [`dual_unary_shared`]).
+#[inline(never)]
+fn dual_binary_shared<const S: usize>(
+    op: BinaryOp,
+    (a, x): IntervalDual<S>,
+    (b, y): IntervalDual<S>,
+) -> IntervalDual<S> {
+    let (v, d) = grad_binary(&mut Reference, op, (a, partials(x)), (b, partials(y)));
+    (v, first(d))
 }
 
 /// `a^n` and `S` partials (see [`dual_unary`]).

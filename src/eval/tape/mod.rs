@@ -41,6 +41,7 @@ use crate::ir::prune::{
 use crate::ir::semantics::{interval_binary, interval_unary};
 use crate::ir::{BinaryOp, Function, Op, UnaryOp, ValueId, Var};
 
+mod dir;
 mod run;
 mod wide;
 

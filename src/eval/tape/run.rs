@@ -3,12 +3,9 @@
 //! column per register. Every result is the reference interpreter's bits.
 
 use super::{Form, Instr, Reg, Tape, Workspace, wide};
+use crate::eval::Grad;
 use crate::eval::cpu::{self, CpuPath};
-use crate::eval::interp::{
-    IntervalDual, dual_binary, dual_powi, dual_unary, point_dual_binary, point_dual_powi,
-    point_dual_unary,
-};
-use crate::eval::{Grad, IntervalGrad};
+use crate::eval::interp::{point_dual_binary, point_dual_powi, point_dual_unary};
 use crate::interval::{Interval, max_nan, min_nan};
 use crate::ir::semantics::{
     interval_binary, interval_unary, point_binary, point_powi, point_unary,
@@ -127,52 +124,6 @@ impl Tape {
         for (g, &(v, d)) in out.iter_mut().zip(&m[r..r + n]) {
             *g = Grad { v, d };
         }
-    }
-
-    /// F over `b` and its derivative along every direction in `v`, the
-    /// same bits as the reference interpreter's
-    /// [`crate::eval::Single::interval_dir`].
-    pub fn interval_dir(
-        &self,
-        b: [Interval; 3],
-        v: [Interval; 3],
-        ws: &mut Workspace,
-    ) -> [Interval; 2] {
-        let (f, [d]) = self.duals(b, v.map(|vk| [vk]), &mut ws.dir);
-        [f, d]
-    }
-
-    /// F over `b` and its three partials, the same bits as the reference
-    /// interpreter's [`crate::eval::Single::interval_grad`].
-    pub fn interval_grad(&self, b: [Interval; 3], ws: &mut Workspace) -> IntervalGrad {
-        let (o, z) = (Interval::point(1.0), Interval::point(0.0));
-        let (v, d) = self.duals(b, [[o, z, z], [z, o, z], [z, z, o]], &mut ws.grad);
-        IntervalGrad { v, d }
-    }
-
-    // Forward mode over the registers: each value with `S` partials, those
-    // of coordinate k starting as `seed[k]`.
-    fn duals<const S: usize>(
-        &self,
-        b: [Interval; 3],
-        seed: [[Interval; S]; 3],
-        m: &mut Vec<IntervalDual<S>>,
-    ) -> IntervalDual<S> {
-        let zero = Interval::point(0.0);
-        if m.len() < self.registers {
-            m.resize(self.registers, (zero, [zero; S]));
-        }
-        for instr in &self.code {
-            let (o, d) = match instr.form() {
-                Form::Var(o, var) => (o, (b[var.index()], seed[var.index()])),
-                Form::Const(o, c) => (o, (Interval::point(c), [zero; S])),
-                Form::Unary(o, op, a) => (o, dual_unary(op, m[a as usize])),
-                Form::Binary(o, op, a, c) => (o, dual_binary(op, m[a as usize], m[c as usize])),
-                Form::Powi(o, a, k) => (o, dual_powi(m[a as usize], k)),
-            };
-            m[o as usize] = d;
-        }
-        m[self.root_reg()]
     }
 
     /// `out[i] = f(xs[i], ys[i], zs[i])`, the same bits as the reference

@@ -86,7 +86,7 @@ fn gradient_batches_give_each_points_bits() {
 }
 
 #[test]
-fn scalar_runs_and_directions_give_the_interpreters_bits() {
+fn scalar_runs_directions_and_gradients_give_the_interpreters_bits() {
     let mut rng = Rng::new(17);
     let mut ws = Workspace::default();
     for seed in 0..300 {
@@ -110,6 +110,11 @@ fn scalar_runs_and_directions_give_the_interpreters_bits() {
             assert!(
                 same_iv(tv, iv) && same_iv(td, id),
                 "seed {seed} over {b:?} along {v:?}"
+            );
+            let (tg, ig) = (tape.interval_grad(b, &mut ws), it.interval_grad(b));
+            assert!(
+                same_iv(tg.v, ig.v) && (0..3).all(|k| same_iv(tg.d[k], ig.d[k])),
+                "seed {seed} over {b:?}: gradient {tg:?} vs {ig:?}"
             );
         }
     }
@@ -319,6 +324,14 @@ fn tapes_past_the_fixed_register_file_give_the_interpreters_bits() {
             let b = random_box(&mut rng, 3.0);
             assert!(
                 same_iv(tape.interval(b, &mut ws), it.interval(b)),
+                "n {n} over {b:?}"
+            );
+            let v = random_box(&mut rng, 2.0);
+            let ([tv, td], [iv, id]) = (tape.interval_dir(b, v, &mut ws), it.interval_dir(b, v));
+            assert!(same_iv(tv, iv) && same_iv(td, id), "n {n} over {b:?}");
+            let (tg, ig) = (tape.interval_grad(b, &mut ws), it.interval_grad(b));
+            assert!(
+                (0..3).all(|k| same_iv(tg.d[k], ig.d[k])),
                 "n {n} over {b:?}"
             );
             let small = random_box(&mut rng, 0.05);
