@@ -144,3 +144,61 @@ fn missing_segments_skip(tr: &Scope<'_>, st: &mut TileState, light: SegEnd) {
         "{missed} missed, {crossing} crossing"
     );
 }
+
+// A shadow beam answers as without a blocker hint, whatever the hint; a
+// hint inside the ball fails a beam under it without a sweep (no
+// interval evaluation), and a failed beam leaves where it found the
+// ball for the next.
+#[test]
+fn beam_blocker_hints_never_change_the_answer() {
+    with_floor_and_ball(beam_hints_hold);
+}
+
+// Four floor points around (x, z), 0.002 apart, as a beam's surfaces.
+fn floor_patch(x: f64, z: f64) -> Vec<HitSurface> {
+    let at = |dx: f64, dz: f64| {
+        let p = DVec3::new(x + dx, -0.5, z + dz);
+        HitSurface {
+            p,
+            n: DVec3::Y,
+            q: p + DVec3::new(0.0, 1e-3, 0.0),
+            v: DVec3::Y,
+            min_w: 1e-3,
+            color: DVec3::ONE,
+            grad_len: 1.0,
+        }
+    };
+    vec![
+        at(0.0, 0.0),
+        at(0.002, 0.0),
+        at(0.0, 0.002),
+        at(0.002, 0.002),
+    ]
+}
+
+fn beam_hints_hold(tr: &Scope<'_>, st: &mut TileState, _: SegEnd) {
+    let light = LightKind::Point([0.0, 2.0, 0.0]);
+    let mut rng = Rng::new(13);
+    let mut lit = 0;
+    for _ in 0..200 {
+        let patch = floor_patch(rng.range(-0.9, 0.9), rng.range(-0.9, 0.9));
+        let free = shadow_beam(tr, &patch, light, &mut None, st);
+        lit += usize::from(free);
+        for hint in [0.0, 0.3, 0.5, 0.99] {
+            let mut blocker = Some(hint);
+            assert_eq!(shadow_beam(tr, &patch, light, &mut blocker, st), free);
+        }
+    }
+    assert!(lit > 20 && lit < 190, "{lit} of 200 lit");
+    // Under the ball: the first beam finds it and says where.
+    let under = floor_patch(0.01, 0.01);
+    let mut blocker = None;
+    assert!(!shadow_beam(tr, &under, light, &mut blocker, st));
+    let found = blocker.expect("a failed beam under the ball names its blocker");
+    // Its neighbour fails on that point alone.
+    let before = st.stats.interval_evals;
+    let next = floor_patch(0.02, 0.01);
+    assert!(!shadow_beam(tr, &next, light, &mut blocker, st));
+    assert_eq!(st.stats.interval_evals, before, "swept despite the hint");
+    assert_eq!(blocker, Some(found));
+}

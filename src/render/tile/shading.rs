@@ -18,6 +18,7 @@ pub(super) fn shadow_beams(
     let t_shadow = Instant::now();
     let nl = tr.ctx.lights.len();
     let mut lit_by_beam = vec![false; surfs.len() * nl];
+    let mut blockers = vec![None; nl];
     for b in &tile.included {
         for (li, light) in tr.ctx.lights.iter().enumerate() {
             if !light.shadows {
@@ -42,7 +43,7 @@ pub(super) fn shadow_beams(
                 continue;
             }
             ts.stats.shadow_beams += 1;
-            if shadow::shadow_beam(tr, &pts, light.kind, ts) {
+            if shadow::shadow_beam(tr, &pts, light.kind, &mut blockers[li], ts) {
                 ts.stats.shadow_beams_ok += 1;
                 ts.stats.shadow_rays_saved += members.len() as u64;
                 for k in members {
