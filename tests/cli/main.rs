@@ -115,6 +115,37 @@ fn auxiliary_outputs_and_stats() {
 }
 
 #[test]
+fn compile_waits_are_reported_apart_from_the_render_time() {
+    let dir = scratch("waits");
+    let (scene, png, stats) = (example("torus.ib"), dir.join("t.png"), dir.join("s.json"));
+    let o = ibeam(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+        "--eval",
+        "jit",
+        "--quiet",
+        "--size",
+        "24x24",
+        "--threads",
+        "1",
+        "--stats-json",
+        stats.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    // The derivative kinds of a short function compile at their first
+    // use, on the thread that asks, which waits: reported, and a part of
+    // what compiled.
+    let ms = |key: &str| json[key].as_f64().unwrap_or_else(|| panic!("{key}"));
+    assert!(ms("compile_wait_ms") > 0.0, "{json}");
+    assert!(ms("compile_wait_ms") <= ms("compile_ms"), "{json}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn enclosure_flag_chooses_the_forms_counted_in_the_stats() {
     let dir = scratch("enclosure");
     let tries = |choice: &str| {

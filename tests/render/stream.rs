@@ -15,6 +15,7 @@ fn counters(s: &RenderStats) -> RenderStats {
     RenderStats {
         time_ms: 0.0,
         compile_ms: 0.0,
+        compile_wait_ms: 0.0,
         trace_cpu_ms: 0.0,
         shade_cpu_ms: 0.0,
         shadow_cpu_ms: 0.0,

@@ -183,6 +183,10 @@ counters! {
         time_ms: f64 => once,
         /// Time to build the evaluators and compile their native code, ms.
         compile_ms: f64 => once,
+        /// Wall time during the render in which a thread compiled native
+        /// code it had asked for and waited on it (left out of
+        /// `time_ms`), ms.
+        compile_wait_ms: f64 => once,
         /// Visibility (beams, rays, root refinement), summed over threads, ms.
         trace_cpu_ms: f64 => sum,
         /// Shading without shadows, summed over threads, ms.

@@ -393,6 +393,7 @@ impl<'a> Frame<'a> {
         stats.compile_ms += compile_ms(self.evaluators) - self.compiled_before;
         let spans = self.evaluators.iter().flat_map(|e| e.compile_waits());
         let waited = span_union(spans, (self.start, end));
+        stats.compile_wait_ms = waited.as_secs_f64() * 1e3;
         stats.time_ms = (end - self.start).saturating_sub(waited).as_secs_f64() * 1e3;
     }
 }
