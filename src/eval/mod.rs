@@ -44,6 +44,16 @@ pub trait Single: Send + Sync {
     /// Intervals containing f and each partial derivative over the box.
     fn interval_grad(&self, b: [Interval; 3]) -> IntervalGrad;
 
+    /// [`Single::interval_grad`] by the interpreter's rules and bits,
+    /// never compiling: native code compiles on first use, and its bits
+    /// differ, so a caller that may not need the kind often can ask this
+    /// until it does (and then ask the other, at a point that does not
+    /// depend on timing). The same as `interval_grad` for evaluators
+    /// without native code.
+    fn interval_grad_interpreted(&self, b: [Interval; 3]) -> IntervalGrad {
+        self.interval_grad(b)
+    }
+
     /// Intervals containing f and its derivative along `v`, `∇f·v`, over
     /// the box `b` (for every direction in the box `v`). The default takes
     /// the dot product of [`Single::interval_grad`]; the evaluators

@@ -296,6 +296,10 @@ impl Single for JitEvaluator {
         }
     }
 
+    fn interval_grad_interpreted(&self, b: [Interval; 3]) -> IntervalGrad {
+        self.interpreter().interval_grad(b)
+    }
+
     fn interval_dir(&self, b: [Interval; 3], v: [Interval; 3]) -> [Interval; 2] {
         match self.answer(Kind::IntervalDir, 1) {
             Answer::Native(Entry::IntervalDir(c)) => {
@@ -404,6 +408,28 @@ mod tests {
             check(&mut rng);
             assert!(bg.compile_time() > Duration::ZERO);
             assert!(bg.compile_waits().is_empty());
+        }
+    }
+
+    // The interpreted interval gradient is the interpreter's, bit for
+    // bit, and compiles nothing, however often it is asked.
+    #[test]
+    fn interpreted_gradients_keep_the_interpreters_bits_and_compile_nothing() {
+        let mut rng = Rng::new(8);
+        for seed in 0..8 {
+            let f = random_function(seed, 8);
+            let bg = JitEvaluator::new(&f).unwrap().in_background();
+            let reference = Interpreter::new(f.clone());
+            for _ in 0..500 {
+                let c = [0, 1, 2].map(|_| rng.range(-2.0, 2.0));
+                let b = c.map(|c| Interval::new(c - 0.25, c + 0.25));
+                let (got, want) = (bg.interval_grad_interpreted(b), reference.interval_grad(b));
+                let same_iv = |a: Interval, b: Interval| {
+                    (a.is_empty() && b.is_empty()) || (same(a.lo, b.lo) && same(a.hi, b.hi))
+                };
+                assert!(same_iv(got.v, want.v) && (0..3).all(|k| same_iv(got.d[k], want.d[k])));
+            }
+            assert!(bg.compile_times().is_empty(), "{:?}", bg.compile_times());
         }
     }
 

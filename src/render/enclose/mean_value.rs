@@ -107,6 +107,11 @@ impl FormPolicy {
         !(tries >= min_tries && wins * ratio < tries)
     }
 
+    /// Whether a try has won at any class.
+    pub(crate) fn has_won(&self) -> bool {
+        self.levels.iter().any(|&(_, wins)| wins > 0)
+    }
+
     /// Records one try at class `level`.
     pub(crate) fn record(&mut self, level: usize, win: bool) {
         let lv = &mut self.levels[level.min(MV_LEVELS - 1)];
@@ -161,8 +166,15 @@ pub(crate) fn sign_bound(
         return Some(natural);
     }
     let mut bound = natural;
+    // Until the form has won on this tile, its gradients come from the
+    // interpreter's rules: on min/max trees such as sphere unions it never
+    // wins, and compiling the native interval gradient for it kept the
+    // render waiting (10 spheres at 1024²: 13 ms of a 15 ms wait). The
+    // switch depends on the tile's own tries alone, so the pixels do not
+    // depend on the thread count or on when code compiles.
+    let native = tile.policy.has_won();
     if tile.policy.pays(level)
-        && let Some(mv) = mean_value_form(ctx.answering(k, &b), b, tile.stats)
+        && let Some(mv) = mean_value_form(ctx.answering(k, &b), b, native, tile.stats)
     {
         // `f` may come from another region's tape than `mv` (one that
         // keeps signs only); the meet still proves a sign only where one
@@ -195,11 +207,22 @@ pub(crate) fn sign_bound(
 
 /// The mean-value form of `e` over the finite box `b`, with the centre's
 /// value and the gradient from one function (see
-/// [`Specialise::answering`]); `None` where a bound is not finite.
-fn mean_value_form(e: &dyn Evaluator, b: IBox, stats: &mut RenderStats) -> Option<Interval> {
+/// [`Specialise::answering`]), the gradient native where `native` (else
+/// the interpreter's, [`Single::interval_grad_interpreted`]); `None`
+/// where a bound is not finite.
+fn mean_value_form(
+    e: &dyn Evaluator,
+    b: IBox,
+    native: bool,
+    stats: &mut RenderStats,
+) -> Option<Interval> {
     let c: [f64; 3] = b.map(|i| i.mid());
     stats.interval_evals += 2;
-    let g = e.interval_grad(b);
+    let g = if native {
+        e.interval_grad(b)
+    } else {
+        e.interval_grad_interpreted(b)
+    };
     if !g.d.iter().all(|&d| proof::bounded(d)) {
         return None;
     }

@@ -177,3 +177,73 @@ fn sign_bounds_across_tapes_never_contradict_the_whole_function() {
     // The mean-value form ran, its gradients from the region's tape.
     assert!(st.stats.mean_value_tries > 0, "the form never ran");
 }
+
+/// A torus about the z axis, radii 0.6 and 0.2, as the quartic
+/// `(x² + y² + z² + R² − r²)² − 4R²(x² + y²)`: x and y appear twice, so
+/// the mean-value form tightens its natural intervals.
+fn torus() -> Function {
+    let mut b = Builder::new();
+    let [x, y, z] = [b.var(Var::X), b.var(Var::Y), b.var(Var::Z)];
+    let (x2, y2, z2) = (b.powi(x, 2), b.powi(y, 2), b.powi(z, 2));
+    let xy = b.binary(BinaryOp::Add, x2, y2);
+    let s = b.binary(BinaryOp::Add, xy, z2);
+    let k = b.constant(0.36 - 0.04);
+    let s = b.binary(BinaryOp::Add, s, k);
+    let s2 = b.powi(s, 2);
+    let four_r2 = b.constant(4.0 * 0.36);
+    let t = b.binary(BinaryOp::Mul, four_r2, xy);
+    let f = b.binary(BinaryOp::Sub, s2, t);
+    b.finish(f)
+}
+
+/// A point on ball `i` of [`balls`] or on [`torus`], from two angles.
+fn on_surface(torus: bool, i: usize, (u, v): (f64, f64)) -> [f64; 3] {
+    if torus {
+        let r = 0.6 + 0.2 * v.cos();
+        [r * u.cos(), r * u.sin(), 0.2 * v.sin()]
+    } else {
+        let c = [i as f64, 0.1 * (i as f64).sin(), 0.1 * (i as f64).cos()];
+        let d = [u.cos() * v.cos(), u.sin() * v.cos(), v.sin()];
+        std::array::from_fn(|k| c[k] + 0.3 * d[k])
+    }
+}
+
+/// The mean-value form asks the native interval gradient only once it has
+/// won on the tile, the interpreter's before: on a union of balls, where
+/// the natural intervals are already tight and it never wins, the native
+/// kind is never compiled (so never waited for); on a torus it wins, and
+/// the native kind then compiles.
+#[test]
+fn mean_value_gradients_go_native_only_after_a_win_on_the_tile() {
+    use crate::eval::jit::JitEvaluator;
+    for (f, is_torus) in [(balls(3), false), (torus(), true)] {
+        let jit = Arc::new(JitEvaluator::new(&f).unwrap().in_background());
+        let evals: [Arc<dyn Evaluator>; 1] = [jit.clone()];
+        let tr = Scope::of_objects_for_tests(&evals, &[], 64);
+        let compiled = || {
+            jit.compile_times()
+                .iter()
+                .any(|(kind, _)| *kind == "interval_grad")
+        };
+        let mut st = TileState::default();
+        let mut rng = Rng::new(21);
+        for _ in 0..2000 {
+            let angles = (rng.range(0.0, 6.3), rng.range(-1.5, 1.5));
+            let c = on_surface(is_torus, rng.range(0.0, 2.99) as usize, angles);
+            let level = rng.range(0.0, 7.99) as usize;
+            let w = 0.002 * f64::from(1 << level);
+            // Off the surface by about a box width: boxes whose natural
+            // interval straddles 0 while f does not.
+            let c: [f64; 3] = std::array::from_fn(|i| c[i] + rng.range(-2.0, 2.0) * w);
+            let b: IBox = std::array::from_fn(|i| Interval::new(c[i] - w, c[i] + w));
+            let won_before = st.mean_value.has_won();
+            scene_signs(&tr, &[0], b, SignForm::Tight(level), &mut st);
+            if !won_before {
+                assert!(!compiled(), "native gradient before a win");
+            }
+        }
+        assert!(st.stats.mean_value_tries >= 16, "{:?}", st.stats);
+        assert_eq!(st.stats.mean_value_wins > 0, is_torus, "{:?}", st.stats);
+        assert_eq!(compiled(), is_torus);
+    }
+}
