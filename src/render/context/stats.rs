@@ -271,11 +271,12 @@ mod tests {
         };
         let json = st.to_json();
         let obj = json.as_object().unwrap();
-        assert_eq!(obj.len(), 39);
+        assert_eq!(obj.len(), 40);
         assert!(obj.get("aa_samples").is_none());
         assert_eq!(json["aa_samples_mean"], 2.5);
         assert_eq!(json["rays"], 3);
         assert_eq!(json["output_ms"], 0.0);
+        assert_eq!(json["compile_wait_ms"], 0.0);
     }
 
     #[test]
