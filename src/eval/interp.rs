@@ -268,8 +268,7 @@ pub(crate) fn dual_binary<const S: usize>(
     }
 }
 
-/// [`dual_binary`] by the shared rules, out of line (see
-/// [`dual_unary_shared`]).
+/// [`dual_binary`] by the shared rules, out of line, as [`dual_unary_shared`].
 #[inline(never)]
 fn dual_binary_shared<const S: usize>(
     op: BinaryOp,
