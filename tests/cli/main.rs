@@ -38,13 +38,18 @@ fn example(name: &str) -> PathBuf {
 
 /// Renders `scene` to `out` with the usual test flags plus `extra`.
 fn render(scene: &Path, out: &Path, extra: &[&str]) -> Output {
+    render_by(EVAL, scene, out, extra)
+}
+
+/// [`render`] with the evaluator `eval`.
+fn render_by(eval: &str, scene: &Path, out: &Path, extra: &[&str]) -> Output {
     let mut args = vec![
         "render",
         scene.to_str().unwrap(),
         "-o",
         out.to_str().unwrap(),
         "--eval",
-        EVAL,
+        eval,
         "--quiet",
     ];
     args.extend_from_slice(extra);
@@ -117,22 +122,10 @@ fn auxiliary_outputs_and_stats() {
 #[test]
 fn compile_waits_are_reported_apart_from_the_render_time() {
     let dir = scratch("waits");
-    let (scene, png, stats) = (example("torus.ib"), dir.join("t.png"), dir.join("s.json"));
-    let o = ibeam(&[
-        "render",
-        scene.to_str().unwrap(),
-        "-o",
-        png.to_str().unwrap(),
-        "--eval",
-        "jit",
-        "--quiet",
-        "--size",
-        "24x24",
-        "--threads",
-        "1",
-        "--stats-json",
-        stats.to_str().unwrap(),
-    ]);
+    let stats = dir.join("s.json");
+    let args = ["--size", "24x24", "--threads", "1", "--stats-json"];
+    let args = [&args[..], &[stats.to_str().unwrap()]].concat();
+    let o = render_by("jit", &example("torus.ib"), &dir.join("t.png"), &args);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
