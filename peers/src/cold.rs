@@ -47,6 +47,10 @@ pub struct ColdTimes {
     pub wall_ms: f64,
     /// `compile_ms` from `--stats-json` (background compilation included).
     pub compile_ms: f64,
+    /// `compile_wait_ms` from `--stats-json`: the render's time waiting
+    /// for native code to compile, outside `time_ms` (NaN from a binary
+    /// too old to report it).
+    pub compile_wait_ms: f64,
     /// `output_ms` from `--stats-json`: encoding and writing the images,
     /// inside `time_ms` (the warm mode writes none).
     pub output_ms: f64,
@@ -117,6 +121,7 @@ impl ColdRender<'_> {
             time_ms: v["time_ms"].as_f64().unwrap_or(f64::NAN),
             wall_ms,
             compile_ms: v["compile_ms"].as_f64().unwrap_or(f64::NAN),
+            compile_wait_ms: v["compile_wait_ms"].as_f64().unwrap_or(f64::NAN),
             output_ms: v["output_ms"].as_f64().unwrap_or(f64::NAN),
             hit: v["pixels_hit"].as_u64().unwrap_or(0),
         })

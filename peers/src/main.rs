@@ -154,7 +154,7 @@ fn selected(args: &Args) -> Result<Vec<Case>, String> {
             })?),
         }
     }
-    if list.iter().any(|w| *w == Workload::Spheres(0)) || args.spheres.contains(&0) {
+    if list.contains(&Workload::Spheres(0)) || args.spheres.contains(&0) {
         return Err("sphere counts must be at least 1".into());
     }
     list.dedup();
