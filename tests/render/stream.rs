@@ -169,24 +169,35 @@ fn sphere() -> ibeam::scene::Scene {
     ibeam::lang::load_scene(&path).unwrap()
 }
 
-#[test]
-fn a_failing_sink_stops_the_stream() {
+/// Runs `test` on a frame of the sphere, `w`×`h`, on `threads` workers.
+fn with_sphere_frame<R>(
+    threads: usize,
+    (w, h): (u32, u32),
+    test: impl FnOnce(Frame<'_>) -> R,
+) -> R {
     let scene = sphere();
     let ev = build_evaluators(&scene, EvalKind::Interp).unwrap();
-    // Many workers, many rows: none is handed on after the error.
     let opts = RenderOptions {
-        threads: Some(6),
-        ..RenderOptions::new(40, 400)
+        threads: Some(threads),
+        ..RenderOptions::new(w, h)
     };
-    let frame = Frame::new(&scene, &ev, &opts, Aa::None).unwrap();
-    let mut calls = 0;
-    let r = frame.stream(|_| {
-        calls += 1;
-        if calls == 2 {
-            Err(SinkError::DiskFull)
-        } else {
-            Ok(())
-        }
+    test(Frame::new(&scene, &ev, &opts, Aa::None).unwrap())
+}
+
+#[test]
+fn a_failing_sink_stops_the_stream() {
+    // Many workers, many rows: none is handed on after the error.
+    let (r, calls) = with_sphere_frame(6, (40, 400), |frame| {
+        let mut calls = 0;
+        let r = frame.stream(|_| {
+            calls += 1;
+            if calls == 2 {
+                Err(SinkError::DiskFull)
+            } else {
+                Ok(())
+            }
+        });
+        (r, calls)
     });
     assert_eq!(r, Err(SinkError::DiskFull));
     assert_eq!(calls, 2);
@@ -199,16 +210,11 @@ fn a_failing_sink_stops_the_stream() {
 fn a_panicking_sink_ends_the_stream_without_a_hang() {
     let (done, finished) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
-        let scene = sphere();
-        let ev = build_evaluators(&scene, EvalKind::Interp).unwrap();
-        let opts = RenderOptions {
-            threads: Some(4),
-            ..RenderOptions::new(40, 640)
-        };
-        let frame = Frame::new(&scene, &ev, &opts, Aa::None).unwrap();
-        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            frame.stream(|_| -> Result<(), RenderError> { panic!("a sink's bug") })
-        }));
+        let r = with_sphere_frame(4, (40, 640), |frame| {
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                frame.stream(|_| -> Result<(), RenderError> { panic!("a sink's bug") })
+            }))
+        });
         done.send(r.is_err()).unwrap();
     });
     let panicked = finished
